@@ -1,0 +1,44 @@
+// A pinhole (perspective) or orthographic camera given the way Blender gives it: camera-to-world matrix and an
+// OpenGL-style projection matrix (Object.calc_matrix_camera), so sensor fit, shift and clipping come for free.
+// Pixel (x, y) has y = 0 at the TOP row of the image.
+#pragma once
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+namespace ps {
+
+struct Ray {
+    glm::vec3 origin;
+    glm::vec3 direction;  // unit
+};
+
+class Camera {
+public:
+    // to_world: camera space (looking down −Z, +Y up) to world, no scale; projection: camera space → clip space.
+    Camera(const glm::mat4& to_world, const glm::mat4& projection, int width, int height);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    bool orthographic() const { return orthographic_; }
+    glm::vec3 position() const { return glm::vec3(to_world_[3]); }
+    float near_clip() const { return near_; }
+    // Perspective: tan of half the vertical field of view; orthographic: half the view height in world units.
+    float vertical_half_extent() const { return half_extent_y_; }
+
+    // Ray through the point (px, py) of the image plane, in pixel units (pixel centres at +0.5).
+    Ray generate_ray(float px, float py) const;
+    // Positive distance of a world point in front of the camera along its viewing axis.
+    float view_depth(const glm::vec3& world_point) const;
+
+private:
+    glm::mat4 to_world_;
+    glm::mat4 inverse_projection_;
+    glm::vec3 forward_;
+    int width_;
+    int height_;
+    bool orthographic_;
+    float near_;
+    float half_extent_y_;
+};
+
+}  // namespace ps

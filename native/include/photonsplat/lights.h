@@ -1,0 +1,34 @@
+// Light sources in radiometric units. The add-on converts Blender/Cycles light settings into these
+// (addon/photonsplat/export/lights.py says how), so the core has one unit system and no Cycles quirks.
+#pragma once
+#include <string>
+
+#include <glm/vec3.hpp>
+
+namespace ps {
+
+enum class LightKind {
+    point,  // isotropic intensity I [W/sr]; a sphere of `radius` for soft shadows (0 = a true point)
+    sun,    // distant light, irradiance E [W/m²] on a surface facing it; `angle` = full angular diameter
+    area,   // one-sided rectangle emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
+};
+
+struct Light {
+    std::string name;
+    LightKind kind = LightKind::point;
+    glm::vec3 value{0.0f};       // point: intensity; sun: irradiance; area: radiance (RGB)
+    glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle
+    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels (unit)
+    float radius = 0.0f;         // point only, >= 0
+    float angle = 0.0f;          // sun only, full angular diameter in radians, in [0, π)
+    glm::vec3 axis_u{1.0f, 0.0f, 0.0f};  // area: full edge vectors (object scale included)
+    glm::vec3 axis_v{0.0f, 1.0f, 0.0f};
+
+    glm::vec3 area_normal() const;  // unit normal of the emitting side of an area light
+    float area() const;             // area light surface area
+};
+
+const char* to_string(LightKind kind);
+void validate(const Light& light, const std::string& where);
+
+}  // namespace ps

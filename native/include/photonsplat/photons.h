@@ -1,0 +1,42 @@
+// Stage 4 of the pipeline: photons traced from the lights with Embree and stored at non-specular hits after
+// at least one bounce (direct light is computed separately by shadow rays, so first hits would count twice).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace ps {
+
+class Scene;
+class RenderControl;
+struct Stats;
+
+enum PhotonFlags : uint32_t {
+    kCaustic = 1u,  // path light → specular+ → this diffuse hit (L S+ D)
+};
+
+struct Photon {
+    glm::vec3 position;  // world space
+    glm::vec3 wi;        // unit, pointing back towards where the photon came from
+    glm::vec3 normal;    // geometric normal at the hit, flipped so that dot(normal, wi) > 0
+    glm::vec3 power;     // flux [W] carried; the estimate divides by the number of EMITTED photons
+    uint32_t flags;      // PhotonFlags
+};
+
+struct PhotonMap {
+    std::vector<Photon> photons;  // in a deterministic order (by emitted photon index)
+    uint64_t emitted = 0;         // photon paths started: the density estimate divides by this
+    size_t bytes() const { return photons.capacity() * sizeof(Photon); }
+};
+
+struct PhotonSettings {
+    uint64_t count = 0;       // photon paths to emit
+    int max_bounces = 8;      // path length bound (a photon is stored at most this many times)
+    uint64_t seed = 0;
+};
+
+PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, const RenderControl& control,
+                        Stats& stats);
+
+}  // namespace ps

@@ -1,0 +1,51 @@
+// Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors and glass to the first
+// non-specular hit. That hit is the pixel's view sample: what photons are later splatted onto.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "photonsplat/camera.h"
+
+namespace ps {
+
+class Scene;
+class RenderControl;
+struct Stats;
+
+enum ViewSampleFlags : uint32_t {
+    kViaSpecular = 1u,  // the camera path bounced off a mirror or through glass before reaching it
+};
+
+struct ViewSample {
+    glm::vec3 position;        // RELATIVE TO ViewSamples::origin (camera-relative: keeps precision far from 0)
+    glm::vec3 normal;          // geometric normal, flipped to face the arriving camera path
+    glm::vec3 shading_normal;  // interpolated normal, on the same side as `normal`
+    glm::vec3 wo;              // unit direction back along the camera path
+    glm::vec3 albedo;          // diffuse reflectance: BRDF = albedo / π
+    glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit)
+    uint32_t pixel;            // y * width + x, y = 0 at the top
+    uint32_t flags;            // ViewSampleFlags
+    float depth;               // view depth of the FIRST hit of the pixel's camera ray (for cluster keys)
+};
+
+struct ViewSamples {
+    int width = 0, height = 0;
+    glm::vec3 origin{0.0f};             // world position all sample positions are relative to (the camera)
+    std::vector<ViewSample> samples;    // at most one per pixel, in pixel order
+    std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
+    std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
+
+    size_t bytes() const;
+};
+
+struct ViewSampleSettings {
+    uint64_t seed = 0;
+    int max_specular_depth = 8;   // bounces through mirror/glass before the path is dropped
+};
+
+ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,
+                                  const RenderControl& control, Stats& stats);
+
+}  // namespace ps
