@@ -29,6 +29,28 @@ struct Light {
 };
 
 const char* to_string(LightKind kind);
+
+// Light arriving at a point from one sampled point of a light (for shadow rays).
+// Reflected radiance estimate = f_r · value · max(0, n·wi), with a shadow ray of length `distance` towards wi.
+struct LightIncidence {
+    glm::vec3 wi;      // unit, from the receiving point towards the light
+    float distance;    // to the sampled light point (infinity for a sun)
+    glm::vec3 value;   // incident radiance × geometry / pdf (irradiance per unit cos θ)
+};
+LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, float u1, float u2);
+bool light_is_delta(const Light& light);  // a point of radius 0 or a 0° sun: one shadow ray is exact
+
+// Total flux [W] the light sends into the scene; a sun's is what crosses the scene's bounding sphere.
+glm::vec3 light_flux(const Light& light, float scene_radius);
+
+// An emitted photon's starting ray, sampled in proportion to the light's emission (so every photon of a
+// light carries the same power: light_flux / photons of that light).
+struct EmissionSample {
+    glm::vec3 origin;
+    glm::vec3 direction;
+};
+EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_center, float scene_radius,
+                                     float u1, float u2, float u3, float u4);
 void validate(const Light& light, const std::string& where);
 
 }  // namespace ps

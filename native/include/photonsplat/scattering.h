@@ -1,0 +1,48 @@
+// What happens where a ray meets a surface, shared by camera paths (view samples) and photon paths, so both
+// see the same geometry, normals and specular interfaces.
+#pragma once
+#include <glm/vec3.hpp>
+
+#include "photonsplat/camera.h"
+
+namespace ps {
+
+class Scene;
+struct Hit;
+struct Material;
+
+struct SurfacePoint {
+    glm::vec3 position;
+    glm::vec3 geometric_normal;  // unit, facing the side the ray came from
+    glm::vec3 shading_normal;    // unit, interpolated, on the same side as geometric_normal
+    bool entering;               // the ray hit the front face (the triangle's winding normal faced the ray)
+    const Material* material;
+};
+
+SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
+
+// A ray origin just off the surface on the side of `normal`, robust at any scale (the integer-ulp offset of
+// Wächter & Binder, Ray Tracing Gems ch. 6), so rays neither re-hit their surface nor tunnel through thin walls.
+glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& normal);
+
+// Orthonormal basis around a unit vector (Duff et al. 2017).
+void orthonormal_basis(const glm::vec3& n, glm::vec3& b1, glm::vec3& b2);
+
+glm::vec3 sample_cosine_hemisphere(const glm::vec3& n, float u1, float u2);  // pdf = cos θ / π
+glm::vec3 sample_uniform_sphere(float u1, float u2);
+glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, float u2);
+
+// One stochastic step through a mirror or glass interface. `direction` is the travel direction of the ray.
+// The branch (reflect or refract) is chosen with probability equal to its Fresnel weight, so the returned
+// weight is the tint only: photon powers and path throughputs stay near equal.
+struct SpecularStep {
+    glm::vec3 direction;
+    glm::vec3 weight;
+    bool transmitted;
+};
+SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
+                              float u);
+
+float luminance(const glm::vec3& rgb);
+
+}  // namespace ps

@@ -1,0 +1,74 @@
+#include "photonsplat/camera.h"
+
+#include <cmath>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/matrix.hpp>
+
+#include "photonsplat/errors.h"
+
+namespace ps {
+
+namespace {
+
+bool all_finite(const glm::mat4& m) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            if (!std::isfinite(m[c][r])) return false;
+    return true;
+}
+
+}  // namespace
+
+Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width, int height)
+    : to_world_(to_world), width_(width), height_(height) {
+    if (width < 1 || height < 1)
+        throw InvalidInput("camera.width/height", "must be at least 1×1, got " + std::to_string(width) + "×" +
+                                                       std::to_string(height));
+    if (!all_finite(to_world)) throw InvalidInput("camera.to_world", "contains NaN or infinity");
+    if (!all_finite(projection)) throw InvalidInput("camera.projection", "contains NaN or infinity");
+    if (std::fabs(glm::determinant(glm::mat3(to_world))) < 1e-12f)
+        throw InvalidInput("camera.to_world", "is singular (zero scale?)");
+    if (std::fabs(glm::determinant(projection)) < 1e-30f)
+        throw InvalidInput("camera.projection", "is singular");
+    // Remove any scale: Cycles does the same with the camera object's matrix.
+    for (int c = 0; c < 3; ++c) to_world_[c] = glm::vec4(glm::normalize(glm::vec3(to_world_[c])), 0.0f);
+    to_world_[3].w = 1.0f;
+    inverse_projection_ = glm::inverse(projection);
+    forward_ = -glm::vec3(to_world_[2]);
+
+    // An OpenGL projection maps camera-space w = −z (perspective) or w = 1 (orthographic).
+    orthographic_ = std::fabs(projection[2][3]) < 1e-6f && std::fabs(projection[3][3] - 1.0f) < 1e-6f;
+    if (projection[1][1] == 0.0f) throw InvalidInput("camera.projection", "has no vertical extent");
+    half_extent_y_ = 1.0f / std::fabs(projection[1][1]);
+    if (orthographic_) {
+        // z_ndc = P22·z + P32 = −1 at the near plane.
+        near_ = (projection[3][2] + 1.0f) / projection[2][2];
+    } else {
+        // z_ndc = (P22·z + P32)/(−z) = −1 at z = −near.
+        near_ = projection[3][2] / (projection[2][2] - 1.0f);
+    }
+    if (!std::isfinite(near_) || (!orthographic_ && near_ <= 0.0f))
+        throw InvalidInput("camera.projection", "near clip distance must be positive, got " + std::to_string(near_));
+}
+
+Ray Camera::generate_ray(float px, float py) const {
+    const float x_ndc = 2.0f * px / static_cast<float>(width_) - 1.0f;
+    const float y_ndc = 1.0f - 2.0f * py / static_cast<float>(height_);
+    glm::vec4 near_point = inverse_projection_ * glm::vec4(x_ndc, y_ndc, -1.0f, 1.0f);
+    glm::vec4 far_point = inverse_projection_ * glm::vec4(x_ndc, y_ndc, 1.0f, 1.0f);
+    near_point /= near_point.w;
+    far_point /= far_point.w;
+    // Rays start on the near clip plane, as Cycles clips at clip_start.
+    glm::vec3 origin = glm::vec3(to_world_ * glm::vec4(glm::vec3(near_point), 1.0f));
+    glm::vec3 direction = glm::mat3(to_world_) * glm::vec3(far_point - near_point);
+    return Ray{origin, glm::normalize(direction)};
+}
+
+float Camera::view_depth(const glm::vec3& world_point) const {
+    return glm::dot(world_point - position(), forward_);
+}
+
+}  // namespace ps

@@ -1,0 +1,141 @@
+#include "photonsplat/photons.h"
+
+#include <algorithm>
+#include <atomic>
+#include <limits>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include "photonsplat/lights.h"
+#include "photonsplat/materials.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/rng.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
+
+namespace ps {
+
+namespace {
+
+// Photons are traced in fixed chunks of consecutive indices, and the chunks' photons concatenated in chunk
+// order: the photon map is then the same whatever the number of threads.
+constexpr uint64_t kChunk = 4096;
+
+struct LightChoice {
+    std::vector<float> cdf;           // over lights, proportional to flux luminance
+    std::vector<glm::vec3> power;     // per light: flux / probability = power of each of its photons
+};
+
+LightChoice choose_lights_by_power(const Scene& scene, float scene_radius) {
+    LightChoice choice;
+    double total = 0.0;
+    std::vector<double> weights;
+    for (const Light& light : scene.lights()) {
+        const double w = std::max(0.0f, luminance(light_flux(light, scene_radius)));
+        weights.push_back(w);
+        total += w;
+    }
+    if (total <= 0.0) return choice;  // no light emits: no photons
+    double running = 0.0;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        running += weights[i];
+        choice.cdf.push_back(static_cast<float>(running / total));
+        const double p = weights[i] / total;
+        choice.power.push_back(p > 0.0 ? light_flux(scene.lights()[i], scene_radius) / static_cast<float>(p)
+                                       : glm::vec3(0.0f));
+    }
+    choice.cdf.back() = 1.0f;
+    return choice;
+}
+
+void trace_one_photon(const Scene& scene, const Light& light, glm::vec3 power, const glm::vec3& scene_center,
+                      float scene_radius, int max_bounces, Rng& rng, std::vector<Photon>& out) {
+    const RayTracer& tracer = scene.ray_tracer();
+    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform(), u4 = rng.uniform();
+    const EmissionSample emitted = sample_light_emission(light, scene_center, scene_radius, u1, u2, u3, u4);
+    Ray ray{emitted.origin, emitted.direction};
+    bool only_specular_so_far = true;
+    for (int vertex = 0; vertex <= max_bounces; ++vertex) {
+        Hit hit;
+        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) return;
+        const SurfacePoint s = surface_at(scene, ray, hit);
+        const Material& m = *s.material;
+        if (m.is_specular()) {
+            const SpecularStep step = scatter_specular(m, s, ray.direction, rng.uniform());
+            // Russian roulette on the tint keeps every surviving photon's power near the emitted one.
+            const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
+            if (!(keep > 0.0f) || rng.uniform() >= keep) return;
+            power *= step.weight / keep;
+            const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
+            ray = Ray{offset_ray_origin(s.position, side), step.direction};
+            continue;
+        }
+        // Diffuse hit. The first one is direct light, which shadow rays already account for.
+        if (vertex > 0) {
+            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, power,
+                                 only_specular_so_far ? static_cast<uint32_t>(kCaustic) : 0u});
+        }
+        only_specular_so_far = false;
+        const float keep = std::max({m.color.x, m.color.y, m.color.z});
+        if (!(keep > 0.0f) || rng.uniform() >= keep) return;
+        power *= m.color / keep;
+        const float v1 = rng.uniform(), v2 = rng.uniform();
+        const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
+        if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below the surface
+        ray = Ray{offset_ray_origin(s.position, s.geometric_normal), direction};
+    }
+}
+
+}  // namespace
+
+PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, const RenderControl& control,
+                        Stats& stats) {
+    StageTimer timer(stats, "photon_trace");
+    PhotonMap map;
+    map.emitted = settings.count;
+    const glm::vec3 center = 0.5f * (scene.bounds_min() + scene.bounds_max());
+    const float radius = std::max(0.5f * glm::length(scene.bounds_max() - scene.bounds_min()), 1e-6f);
+    const LightChoice lights = choose_lights_by_power(scene, radius);
+    if (lights.cdf.empty() || settings.count == 0 || scene.triangles().empty()) return map;
+
+    scene.ray_tracer();
+    const uint64_t chunks = (settings.count + kChunk - 1) / kChunk;
+    std::vector<std::vector<Photon>> per_chunk(chunks);
+    std::atomic<bool> cancelled{false};
+    tbb::parallel_for(uint64_t{0}, chunks, [&](uint64_t chunk) {
+        if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
+            cancelled = true;
+            return;
+        }
+        const uint64_t end = std::min(settings.count, (chunk + 1) * kChunk);
+        for (uint64_t index = chunk * kChunk; index < end; ++index) {
+            Rng rng(settings.seed, RngDomain::photon, index);
+            const float u = rng.uniform();
+            const size_t l = static_cast<size_t>(std::upper_bound(lights.cdf.begin(), lights.cdf.end(), u) - lights.cdf.begin());
+            const size_t which = std::min(l, lights.cdf.size() - 1);
+            trace_one_photon(scene, scene.lights()[which], lights.power[which], center, radius, settings.max_bounces,
+                             rng, per_chunk[chunk]);
+        }
+    });
+    control.check();
+
+    size_t total = 0;
+    for (const auto& c : per_chunk) total += c.size();
+    map.photons.reserve(total);
+    for (auto& c : per_chunk) {
+        map.photons.insert(map.photons.end(), c.begin(), c.end());
+        std::vector<Photon>().swap(c);
+    }
+    size_t caustic = 0;
+    for (const Photon& p : map.photons) caustic += (p.flags & kCaustic) ? 1 : 0;
+    stats.counters["photons_emitted"] += static_cast<double>(map.emitted);
+    stats.counters["photons_stored"] += static_cast<double>(map.photons.size());
+    stats.counters["caustic_photons_stored"] += static_cast<double>(caustic);
+    stats.bytes["photon_map"] = static_cast<double>(map.bytes());
+    return map;
+}
+
+}  // namespace ps

@@ -1,0 +1,150 @@
+#include "photonsplat/render.h"
+
+#include <cmath>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <tbb/task_arena.h>
+
+#include "photonsplat/direct_light.h"
+#include "photonsplat/errors.h"
+#include "photonsplat/hierarchy.h"
+#include "photonsplat/photons.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/view_samples.h"
+
+namespace ps {
+
+namespace {
+
+constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyond any machine we target
+
+template <typename T>
+void require(bool ok, const std::string& field, const std::string& what, T value) {
+    if (!ok) throw InvalidInput(field, what + ", got " + std::to_string(value));
+}
+
+}  // namespace
+
+void validate(const RenderSettings& s) {
+    require(s.photons <= kMaxPhotons, "photons", "must be at most " + std::to_string(kMaxPhotons), s.photons);
+    require(std::isfinite(s.radius) && s.radius >= 0.0f, "radius", "must be finite and >= 0 (0 = automatic)", s.radius);
+    require(s.max_bounces >= 0 && s.max_bounces <= 1000, "max_bounces", "must be in [0, 1000]", s.max_bounces);
+    require(s.threads >= 0 && s.threads <= 4096, "threads", "must be in [0, 4096] (0 = all cores)", s.threads);
+    require(s.direct_samples >= 1 && s.direct_samples <= 4096, "direct_samples", "must be in [1, 4096]",
+            s.direct_samples);
+    require(std::isfinite(s.normal_tolerance) && s.normal_tolerance > 0.0f && s.normal_tolerance <= 180.0f,
+            "normal_tolerance", "must be in (0, 180] degrees", s.normal_tolerance);
+    require(std::isfinite(s.plane_distance) && s.plane_distance >= 0.0f, "plane_distance",
+            "must be finite and >= 0 (0 = off)", s.plane_distance);
+}
+
+float default_radius(const Scene& scene, uint64_t photons) {
+    // About 1.5 % of the scene's diagonal at 200k photons, shrinking as 1/sqrt(N) so that a kernel disc
+    // holds roughly the same number of photons whatever the count.
+    const float diagonal = glm::length(scene.bounds_max() - scene.bounds_min());
+    const double n = static_cast<double>(std::max<uint64_t>(photons, 1));
+    return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
+}
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+    validate(settings);
+    RenderResult result;
+    const int width = camera.width(), height = camera.height();
+    const size_t pixels = static_cast<size_t>(width) * height;
+    Stats& stats = result.stats;
+    const float radius = settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+    stats.values["radius"] = radius;
+    stats.values["photons"] = static_cast<double>(settings.photons);
+    stats.values["width"] = width;
+    stats.values["height"] = height;
+    stats.counters["triangles"] = static_cast<double>(scene.triangles().size());
+    stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
+    stats.counters["lights"] = static_cast<double>(scene.lights().size());
+
+    tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        StageTimer total(stats, "total");
+        control.set_stage("scene", 0.0);
+        {
+            StageTimer t(stats, "scene_build");
+            stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
+        }
+        control.check();
+
+        control.set_stage("view samples", 0.02);
+        ViewSampleSettings view_settings;
+        view_settings.seed = settings.seed;
+        view_settings.max_specular_depth = settings.max_bounces;
+        const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
+
+        control.set_stage("direct light", 0.15);
+        DirectLightSettings direct_settings;
+        direct_settings.seed = settings.seed;
+        direct_settings.samples_per_light = settings.direct_samples;
+        const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
+
+        control.set_stage("photons", 0.35);
+        PhotonSettings photon_settings;
+        photon_settings.count = settings.photons;
+        photon_settings.max_bounces = settings.max_bounces;
+        photon_settings.seed = settings.seed;
+        const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
+
+        SplatParams params;
+        params.radius = radius;
+        params.cos_normal_tolerance = std::cos(settings.normal_tolerance * 3.14159265358979f / 180.0f);
+        params.plane_distance_factor = settings.plane_distance;
+        params.emitted = std::max<uint64_t>(photons.emitted, 1);
+        std::vector<glm::vec3> indirect;
+        if (settings.method == SplatMethod::brute) {
+            control.set_stage("splat (brute)", 0.55);
+            StageTimer t(stats, "splat");
+            indirect = splat_brute(samples, photons, params, control, stats);
+        } else {
+            control.set_stage("cluster hierarchy", 0.5);
+            ClusterHierarchy hierarchy;
+            {
+                StageTimer t(stats, "hierarchy_build");
+                hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera));
+            }
+            stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
+            stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
+            stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
+            control.check();
+            control.set_stage("splat (cluster)", 0.6);
+            StageTimer t(stats, "splat");
+            indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
+        }
+        control.check();
+
+        control.set_stage("image", 0.98);
+        StageTimer t(stats, "image");
+        result.width = width;
+        result.height = height;
+        result.rgba.assign(pixels * 4, 0.0f);
+        result.emission.assign(pixels * 3, 0.0f);
+        result.direct.assign(pixels * 3, 0.0f);
+        result.indirect.assign(pixels * 3, 0.0f);
+        for (size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+        for (size_t i = 0; i < samples.samples.size(); ++i) {
+            const size_t p = samples.samples[i].pixel;
+            for (int c = 0; c < 3; ++c) {
+                result.direct[3 * p + c] = direct[i][c];
+                result.indirect[3 * p + c] = indirect[i][c];
+            }
+        }
+        for (size_t p = 0; p < pixels; ++p) {
+            for (int c = 0; c < 3; ++c)
+                result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
+            result.rgba[4 * p + 3] = 1.0f;  // film transparency is not offered yet: the background is opaque
+        }
+        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
+    });
+    control.set_stage("done", 1.0);
+    return result;
+}
+
+}  // namespace ps

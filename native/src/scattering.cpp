@@ -1,0 +1,121 @@
+#include "photonsplat/scattering.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <glm/geometric.hpp>
+
+#include "photonsplat/materials.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/scene.h"
+
+namespace ps {
+
+namespace {
+constexpr float kPi = 3.14159265358979323846f;
+}
+
+float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
+    const Triangle& tri = scene.triangles()[hit.triangle];
+    SurfacePoint s;
+    const float w = 1.0f - hit.u - hit.v;
+    s.position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
+    glm::vec3 ng = glm::normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+    glm::vec3 ns = w * tri.n0 + hit.u * tri.n1 + hit.v * tri.n2;
+    const float len = glm::length(ns);
+    ns = (len > 1e-12f) ? ns / len : ng;
+    // Blender's planes are visible from both sides: orient by the ray, never trust the winding alone.
+    s.entering = glm::dot(ng, ray.direction) < 0.0f;
+    if (!s.entering) ng = -ng;
+    if (glm::dot(ns, ng) < 0.0f) ns = -ns;
+    s.geometric_normal = ng;
+    s.shading_normal = ns;
+    s.material = &scene.materials()[tri.material];
+    return s;
+}
+
+glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& n) {
+    constexpr float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    glm::vec3 result;
+    for (int i = 0; i < 3; ++i) {
+        int32_t offset = static_cast<int32_t>(int_scale * n[i]);
+        int32_t bits;
+        std::memcpy(&bits, &p[i], sizeof bits);
+        bits += (p[i] < 0.0f) ? -offset : offset;
+        float moved;
+        std::memcpy(&moved, &bits, sizeof moved);
+        result[i] = std::fabs(p[i]) < origin ? p[i] + float_scale * n[i] : moved;
+    }
+    return result;
+}
+
+void orthonormal_basis(const glm::vec3& n, glm::vec3& b1, glm::vec3& b2) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float b = n.x * n.y * a;
+    b1 = glm::vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    b2 = glm::vec3(b, sign + n.y * n.y * a, -n.y);
+}
+
+glm::vec3 sample_cosine_hemisphere(const glm::vec3& n, float u1, float u2) {
+    const float r = std::sqrt(u1);
+    const float phi = 2.0f * kPi * u2;
+    glm::vec3 b1, b2;
+    orthonormal_basis(n, b1, b2);
+    const float z = std::sqrt(std::max(0.0f, 1.0f - u1));
+    return glm::normalize(r * std::cos(phi) * b1 + r * std::sin(phi) * b2 + z * n);
+}
+
+glm::vec3 sample_uniform_sphere(float u1, float u2) {
+    const float z = 1.0f - 2.0f * u1;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    const float phi = 2.0f * kPi * u2;
+    return glm::vec3(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, float u2) {
+    const float cos_theta = 1.0f - u1 * (1.0f - cos_max);
+    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    const float phi = 2.0f * kPi * u2;
+    glm::vec3 b1, b2;
+    orthonormal_basis(axis, b1, b2);
+    return glm::normalize(sin_theta * std::cos(phi) * b1 + sin_theta * std::sin(phi) * b2 + cos_theta * axis);
+}
+
+// Unpolarised Fresnel reflectance of a smooth dielectric; cos_i > 0 on the incident side, eta = n_i / n_t.
+static float fresnel_dielectric(float cos_i, float eta, float& cos_t) {
+    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        cos_t = 0.0f;
+        return 1.0f;  // total internal reflection
+    }
+    cos_t = std::sqrt(1.0f - sin2_t);
+    const float r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    const float r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5f * (r_s * r_s + r_p * r_p);
+}
+
+SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
+                              float u) {
+    const glm::vec3 n = surface.shading_normal;  // faces the incoming ray
+    const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
+    const glm::vec3 reflected = glm::normalize(direction + 2.0f * cos_i * n);
+    if (material.kind == MaterialKind::mirror) {
+        // Fresnel-Schlick with the metal's tint as F0.
+        const float m = std::pow(1.0f - cos_i, 5.0f);
+        return {reflected, material.color + (glm::vec3(1.0f) - material.color) * m, false};
+    }
+    // Glass: entering the front face goes from air (1) into the material (ior); leaving goes back out.
+    const float eta = surface.entering ? 1.0f / material.ior : material.ior;
+    float cos_t = 0.0f;
+    const float reflectance = fresnel_dielectric(cos_i, eta, cos_t);
+    if (u < reflectance) return {reflected, glm::vec3(1.0f), false};
+    // Radiance's (n_t/n_i)² factor is left out: it cancels on the way in and out of closed objects.
+    const glm::vec3 refracted = glm::normalize(eta * direction + (eta * cos_i - cos_t) * n);
+    return {refracted, material.color, true};
+}
+
+}  // namespace ps

@@ -1,0 +1,114 @@
+#include "photonsplat/view_samples.h"
+
+#include <atomic>
+#include <limits>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "photonsplat/materials.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/rng.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
+
+namespace ps {
+
+size_t ViewSamples::bytes() const {
+    return samples.capacity() * sizeof(ViewSample) + emission.capacity() * sizeof(glm::vec3) +
+           alpha.capacity() * sizeof(float);
+}
+
+namespace {
+
+// Follows one camera ray through mirrors and glass. Returns true and fills `sample` at the first diffuse hit;
+// adds emission and background seen along the way to `emitted`.
+bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& rng, int max_specular_depth,
+                       ViewSample& sample, glm::vec3& emitted, float& alpha) {
+    const RayTracer& tracer = scene.ray_tracer();
+    glm::vec3 throughput(1.0f);
+    for (int depth = 0;; ++depth) {
+        Hit hit;
+        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) {
+            emitted += throughput * scene.background();
+            return false;
+        }
+        const SurfacePoint s = surface_at(scene, ray, hit);
+        if (depth == 0) {
+            alpha = 1.0f;
+            sample.depth = camera.view_depth(s.position);
+        }
+        emitted += throughput * s.material->emission;
+        if (!s.material->is_specular()) {
+            sample.position = s.position;  // made camera-relative by the caller
+            sample.normal = s.geometric_normal;
+            sample.shading_normal = s.shading_normal;
+            sample.wo = -ray.direction;
+            sample.albedo = s.material->color;
+            sample.throughput = throughput;
+            sample.flags = depth > 0 ? kViaSpecular : 0u;
+            return true;
+        }
+        if (depth >= max_specular_depth) return false;
+        const SpecularStep step = scatter_specular(*s.material, s, ray.direction, rng.uniform());
+        throughput *= step.weight;
+        if (throughput.x <= 0.0f && throughput.y <= 0.0f && throughput.z <= 0.0f) return false;
+        const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
+        ray = Ray{offset_ray_origin(s.position, side), step.direction};
+    }
+}
+
+}  // namespace
+
+ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,
+                                  const RenderControl& control, Stats& stats) {
+    StageTimer timer(stats, "view_samples");
+    const int width = camera.width(), height = camera.height();
+    const size_t pixels = static_cast<size_t>(width) * height;
+    ViewSamples out;
+    out.width = width;
+    out.height = height;
+    out.origin = camera.position();
+    out.emission.assign(pixels, glm::vec3(0.0f));
+    out.alpha.assign(pixels, 0.0f);
+
+    std::vector<ViewSample> per_pixel(pixels);
+    std::vector<uint8_t> has_sample(pixels, 0);
+    scene.ray_tracer();  // build the BVH once, before the threads need it
+    std::atomic<bool> cancelled{false};
+    tbb::parallel_for(tbb::blocked_range<int>(0, height, 8), [&](const tbb::blocked_range<int>& rows) {
+        if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
+            cancelled = true;
+            return;
+        }
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            for (int x = 0; x < width; ++x) {
+                const size_t pixel = static_cast<size_t>(y) * width + x;
+                Rng rng(settings.seed, RngDomain::camera, pixel);
+                const Ray ray = camera.generate_ray(x + 0.5f, y + 0.5f);
+                ViewSample& sample = per_pixel[pixel];
+                sample.pixel = static_cast<uint32_t>(pixel);
+                if (trace_camera_path(scene, camera, ray, rng, settings.max_specular_depth, sample,
+                                      out.emission[pixel], out.alpha[pixel])) {
+                    sample.position -= out.origin;
+                    has_sample[pixel] = 1;
+                }
+            }
+        }
+    });
+    control.check();
+
+    size_t count = 0;
+    for (uint8_t h : has_sample) count += h;
+    out.samples.reserve(count);
+    for (size_t p = 0; p < pixels; ++p)
+        if (has_sample[p]) out.samples.push_back(per_pixel[p]);
+    stats.counters["view_samples"] += static_cast<double>(count);
+    stats.bytes["view_samples"] = static_cast<double>(out.bytes());
+    return out;
+}
+
+}  // namespace ps
