@@ -6,7 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "photonsplat/lights.h"
+#include "photonsplat/light_sources.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
@@ -22,7 +22,8 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                                             Stats& stats) {
     StageTimer timer(stats, "direct_light");
     std::vector<glm::vec3> out(samples.samples.size(), glm::vec3(0.0f));
-    if (scene.lights().empty() || samples.samples.empty()) return out;
+    const LightSources sources(scene);
+    if (sources.size() == 0 || samples.samples.empty()) return out;
     const RayTracer& tracer = scene.ray_tracer();
     const float inv_pi = 1.0f / 3.14159265358979323846f;
     std::atomic<bool> cancelled{false};
@@ -39,12 +40,12 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             const glm::vec3 x = s.position + samples.origin;
             Rng rng(settings.seed, RngDomain::direct_light, s.pixel);
             glm::vec3 sum(0.0f);
-            for (const Light& light : scene.lights()) {
-                const int n = light_is_delta(light) ? 1 : settings.samples_per_light;
+            for (size_t l = 0; l < sources.size(); ++l) {
+                const int n = sources.is_delta(l) ? 1 : settings.samples_per_light;
                 glm::vec3 light_sum(0.0f);
                 for (int k = 0; k < n; ++k) {
-                    const float u1 = rng.uniform(), u2 = rng.uniform();
-                    const LightIncidence in = sample_light_incidence(light, x, u1, u2);
+                    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+                    const LightIncidence in = sources.sample_incidence(l, x, s.normal, u1, u2, u3);
                     // Light must arrive on the side the camera sees; the shading normal only weights it.
                     if (!(glm::dot(in.wi, s.normal) > 0.0f)) continue;
                     const float cos_shading = glm::dot(in.wi, s.shading_normal);

@@ -125,6 +125,7 @@ glm::vec3 light_flux(const Light& light, float scene_radius) {
 EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_center, float scene_radius,
                                      float u1, float u2, float u3, float u4) {
     EmissionSample out;
+    out.power = light_flux(light, scene_radius);
     switch (light.kind) {
         case LightKind::point: {
             if (light.radius > 0.0f) {

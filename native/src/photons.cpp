@@ -7,7 +7,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
-#include "photonsplat/lights.h"
+#include "photonsplat/light_sources.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
@@ -24,38 +24,38 @@ namespace {
 // order: the photon map is then the same whatever the number of threads.
 constexpr uint64_t kChunk = 4096;
 
-struct LightChoice {
-    std::vector<float> cdf;           // over lights, proportional to flux luminance
-    std::vector<glm::vec3> power;     // per light: flux / probability = power of each of its photons
+// Sources are chosen in proportion to the luminance of their flux, so photons carry near-equal power.
+struct SourceChoice {
+    std::vector<float> cdf;
+    std::vector<float> probability;
 };
 
-LightChoice choose_lights_by_power(const Scene& scene, float scene_radius) {
-    LightChoice choice;
+SourceChoice choose_sources_by_power(const LightSources& sources) {
+    SourceChoice choice;
     double total = 0.0;
     std::vector<double> weights;
-    for (const Light& light : scene.lights()) {
-        const double w = std::max(0.0f, luminance(light_flux(light, scene_radius)));
+    for (size_t i = 0; i < sources.size(); ++i) {
+        const double w = std::max(0.0f, luminance(sources.flux(i)));
         weights.push_back(w);
         total += w;
     }
-    if (total <= 0.0) return choice;  // no light emits: no photons
+    if (total <= 0.0) return choice;  // nothing emits: no photons
     double running = 0.0;
-    for (size_t i = 0; i < weights.size(); ++i) {
-        running += weights[i];
+    for (double w : weights) {
+        running += w;
         choice.cdf.push_back(static_cast<float>(running / total));
-        const double p = weights[i] / total;
-        choice.power.push_back(p > 0.0 ? light_flux(scene.lights()[i], scene_radius) / static_cast<float>(p)
-                                       : glm::vec3(0.0f));
+        choice.probability.push_back(static_cast<float>(w / total));
     }
     choice.cdf.back() = 1.0f;
     return choice;
 }
 
-void trace_one_photon(const Scene& scene, const Light& light, glm::vec3 power, const glm::vec3& scene_center,
-                      float scene_radius, int max_bounces, Rng& rng, std::vector<Photon>& out) {
+void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
+                      int max_bounces, Rng& rng, std::vector<Photon>& out) {
     const RayTracer& tracer = scene.ray_tracer();
-    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform(), u4 = rng.uniform();
-    const EmissionSample emitted = sample_light_emission(light, scene_center, scene_radius, u1, u2, u3, u4);
+    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
+    const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
+    glm::vec3 power = emitted.power / source_probability;
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
@@ -96,10 +96,9 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     StageTimer timer(stats, "photon_trace");
     PhotonMap map;
     map.emitted = settings.count;
-    const glm::vec3 center = 0.5f * (scene.bounds_min() + scene.bounds_max());
-    const float radius = std::max(0.5f * glm::length(scene.bounds_max() - scene.bounds_min()), 1e-6f);
-    const LightChoice lights = choose_lights_by_power(scene, radius);
-    if (lights.cdf.empty() || settings.count == 0 || scene.triangles().empty()) return map;
+    const LightSources sources(scene);
+    const SourceChoice choice = choose_sources_by_power(sources);
+    if (choice.cdf.empty() || settings.count == 0 || scene.triangles().empty()) return map;
 
     scene.ray_tracer();
     const uint64_t chunks = (settings.count + kChunk - 1) / kChunk;
@@ -114,10 +113,10 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
         for (uint64_t index = chunk * kChunk; index < end; ++index) {
             Rng rng(settings.seed, RngDomain::photon, index);
             const float u = rng.uniform();
-            const size_t l = static_cast<size_t>(std::upper_bound(lights.cdf.begin(), lights.cdf.end(), u) - lights.cdf.begin());
-            const size_t which = std::min(l, lights.cdf.size() - 1);
-            trace_one_photon(scene, scene.lights()[which], lights.power[which], center, radius, settings.max_bounces,
-                             rng, per_chunk[chunk]);
+            const size_t l = static_cast<size_t>(std::upper_bound(choice.cdf.begin(), choice.cdf.end(), u) - choice.cdf.begin());
+            const size_t which = std::min(l, choice.cdf.size() - 1);
+            trace_one_photon(scene, sources, which, choice.probability[which], settings.max_bounces, rng,
+                             per_chunk[chunk]);
         }
     });
     control.check();

@@ -92,3 +92,25 @@ TEST(DirectLight, AreaLightMatchesNumericalIntegral) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace ps;
+
+TEST(DirectLight, UniformSkyOverAPlaneGivesAlbedoTimesSkyRadiance) {
+    Scene scene;
+    scene.add_material({"plane", MaterialKind::diffuse, glm::vec3(0.6f), 1.45f, glm::vec3(0.0f)});
+    test::add_quad(scene, "plane", {-1000, -1000, 0}, {1000, -1000, 0}, {1000, 1000, 0}, {-1000, 1000, 0}, 0);
+    scene.set_background(glm::vec3(0.5f, 1.0f, 2.0f));
+    const Camera camera = test::look_at({0, 0, 1}, {0, 0, 0}, 8, 8, 20.0f, {0, 1, 0});
+    RenderControl control;
+    Stats stats;
+    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
+    for (const glm::vec3& d : direct) {
+        EXPECT_NEAR(d.x, 0.6f * 0.5f, 1e-3f);
+        EXPECT_NEAR(d.z, 0.6f * 2.0f, 4e-3f);
+    }
+}
+
+}  // namespace

@@ -140,3 +140,37 @@ TEST(Render, SettingsAreValidatedNamingTheField) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace ps;
+
+// Inside a closed box whose walls all emit Le and reflect with albedo a, radiance is Le/(1 − a) everywhere:
+// emission, direct light from the emissive walls and splatted photons must add up to exactly that.
+TEST(Render, ClosedEmissiveBoxReachesLeOverOneMinusAlbedo) {
+    Scene scene;
+    const float albedo = 0.5f, le = 1.0f;
+    scene.add_material({"wall", MaterialKind::diffuse, glm::vec3(albedo), 1.45f, glm::vec3(le)});
+    const glm::vec3 c[8] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                            {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+    test::add_quad(scene, "bottom", c[0], c[1], c[2], c[3], 0);
+    test::add_quad(scene, "top", c[4], c[7], c[6], c[5], 0);
+    test::add_quad(scene, "front", c[0], c[4], c[5], c[1], 0);
+    test::add_quad(scene, "back", c[3], c[2], c[6], c[7], 0);
+    test::add_quad(scene, "left", c[0], c[3], c[7], c[4], 0);
+    test::add_quad(scene, "right", c[1], c[5], c[6], c[2], 0);
+    const Camera camera = test::look_at({0, 0, 0}, {0, 1, 0}, 16, 16, 30.0f);
+    RenderSettings settings;
+    settings.photons = 400000;
+    settings.radius = 0.1f;
+    settings.max_bounces = 64;
+    settings.direct_samples = 16;
+    RenderControl control;
+    const RenderResult r = render(scene, camera, settings, control);
+    double mean = 0.0;
+    for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba[4 * p + 1];
+    mean /= 16 * 16;
+    EXPECT_NEAR(mean, le / (1.0f - albedo), 0.03 * le / (1.0f - albedo));
+}
+
+}  // namespace

@@ -48,6 +48,7 @@ glm::vec3 light_flux(const Light& light, float scene_radius);
 struct EmissionSample {
     glm::vec3 origin;
     glm::vec3 direction;
+    glm::vec3 power;  // flux carried by this sample (before dividing by the probability of its source)
 };
 EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_center, float scene_radius,
                                      float u1, float u2, float u3, float u4);

@@ -1,0 +1,52 @@
+// Everything that emits light, as direct light and photon tracing see it: the scene's lights, the emissive
+// surfaces (all triangles whose material has emission, as one source: Cycles' "mesh lights") and a uniform
+// world background. Built per render from the scene, so a scene without emission pays nothing for it.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "photonsplat/lights.h"
+
+namespace ps {
+
+class Scene;
+
+class LightSources {
+public:
+    explicit LightSources(const Scene& scene);
+
+    size_t size() const { return sources_.size(); }
+    const std::string& name(size_t i) const { return sources_[i].name; }
+    glm::vec3 flux(size_t i) const { return sources_[i].flux; }  // [W] sent into the scene
+    bool is_delta(size_t i) const;                                // one shadow ray is exact
+
+    // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
+    LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
+                                    float u3) const;
+    // A photon's starting ray and power. u1..u5 in [0, 1).
+    EmissionSample sample_emission(size_t i, float u1, float u2, float u3, float u4, float u5) const;
+
+private:
+    enum class Kind { light, emissive_surfaces, world };
+    struct Source {
+        Kind kind;
+        std::string name;
+        glm::vec3 flux;
+        const Light* light = nullptr;
+    };
+    const Scene& scene_;
+    glm::vec3 center_;
+    float radius_;  // of the scene's bounding sphere
+    std::vector<Source> sources_;
+    // Emissive triangles, chosen in proportion to area × luminance of their emission.
+    std::vector<uint32_t> emitters_;
+    std::vector<float> emitter_cdf_;
+    std::vector<float> emitter_probability_;
+
+    size_t pick_emitter(float u) const;
+};
+
+}  // namespace ps

@@ -1,0 +1,133 @@
+#include "photonsplat/light_sources.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+
+namespace ps {
+
+namespace {
+constexpr float kPi = 3.14159265358979323846f;
+
+glm::vec3 point_on_triangle(const Triangle& t, float u1, float u2) {
+    const float s = std::sqrt(u1);
+    return (1.0f - s) * t.v0 + s * (1.0f - u2) * t.v1 + s * u2 * t.v2;
+}
+float triangle_area(const Triangle& t) { return 0.5f * glm::length(glm::cross(t.v1 - t.v0, t.v2 - t.v0)); }
+}  // namespace
+
+LightSources::LightSources(const Scene& scene) : scene_(scene) {
+    center_ = 0.5f * (scene.bounds_min() + scene.bounds_max());
+    radius_ = std::max(0.5f * glm::length(scene.bounds_max() - scene.bounds_min()), 1e-6f);
+    for (const Light& light : scene.lights())
+        sources_.push_back({Kind::light, light.name, light_flux(light, radius_), &light});
+
+    // Emission from both faces, like Cycles: flux of a triangle = 2 · π · area · radiance.
+    double total = 0.0;
+    glm::dvec3 flux(0.0);
+    const auto& triangles = scene.triangles();
+    for (uint32_t t = 0; t < triangles.size(); ++t) {
+        const glm::vec3 e = scene.materials()[triangles[t].material].emission;
+        const double w = triangle_area(triangles[t]) * luminance(e);
+        if (!(w > 0.0)) continue;
+        emitters_.push_back(t);
+        total += w;
+        emitter_cdf_.push_back(static_cast<float>(total));
+        flux += 2.0 * kPi * triangle_area(triangles[t]) * glm::dvec3(e);
+    }
+    if (!emitters_.empty()) {
+        for (size_t k = 0; k < emitters_.size(); ++k) {
+            const double previous = k ? emitter_cdf_[k - 1] : 0.0;
+            emitter_probability_.push_back(static_cast<float>((emitter_cdf_[k] - previous) / total));
+        }
+        for (float& c : emitter_cdf_) c = static_cast<float>(c / total);
+        emitter_cdf_.back() = 1.0f;
+        sources_.push_back({Kind::emissive_surfaces, "emissive surfaces", glm::vec3(flux)});
+    }
+    // A uniform environment of radiance L sends 4π · πR² · L through the scene's bounding sphere.
+    const glm::vec3 background = scene.background();
+    if (luminance(background) > 0.0f && !triangles.empty())
+        sources_.push_back({Kind::world, "world", 4.0f * kPi * kPi * radius_ * radius_ * background});
+}
+
+bool LightSources::is_delta(size_t i) const {
+    return sources_[i].kind == Kind::light && light_is_delta(*sources_[i].light);
+}
+
+size_t LightSources::pick_emitter(float u) const {
+    const size_t k = static_cast<size_t>(std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u) - emitter_cdf_.begin());
+    return std::min(k, emitters_.size() - 1);
+}
+
+LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
+                                              float u3) const {
+    const Source& source = sources_[i];
+    switch (source.kind) {
+        case Kind::light: return sample_light_incidence(*source.light, x, u1, u2);
+        case Kind::emissive_surfaces: {
+            const size_t k = pick_emitter(u1);
+            const Triangle& t = scene_.triangles()[emitters_[k]];
+            const glm::vec3 y = point_on_triangle(t, u2, u3);
+            const glm::vec3 to_light = y - x;
+            LightIncidence out;
+            const float d2 = glm::dot(to_light, to_light);
+            out.distance = std::sqrt(d2);
+            out.wi = to_light / out.distance;
+            const glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+            const float cos_light = std::fabs(glm::dot(ng, out.wi));
+            const float pdf_area = emitter_probability_[k] / triangle_area(t);
+            out.value = (d2 > 0.0f && pdf_area > 0.0f)
+                            ? scene_.materials()[t.material].emission * (cos_light / (d2 * pdf_area))
+                            : glm::vec3(0.0f);
+            return out;
+        }
+        case Kind::world: {
+            // Cosine-weighted about the surface: f·L·cos/pdf = f·L·π, written as value·cos for the caller.
+            LightIncidence out;
+            out.wi = sample_cosine_hemisphere(n, u1, u2);
+            out.distance = std::numeric_limits<float>::infinity();
+            const float cos_n = glm::dot(out.wi, n);
+            out.value = cos_n > 1e-6f ? scene_.background() * (kPi / cos_n) : glm::vec3(0.0f);
+            return out;
+        }
+    }
+    return {};
+}
+
+EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float u3, float u4, float u5) const {
+    const Source& source = sources_[i];
+    switch (source.kind) {
+        case Kind::light: return sample_light_emission(*source.light, center_, radius_, u1, u2, u3, u4);
+        case Kind::emissive_surfaces: {
+            const size_t k = pick_emitter(u1);
+            const Triangle& t = scene_.triangles()[emitters_[k]];
+            glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+            if (u5 < 0.5f) ng = -ng;  // both faces emit
+            EmissionSample out;
+            out.origin = offset_ray_origin(point_on_triangle(t, u2, u3), ng);
+            out.direction = sample_cosine_hemisphere(ng, u4, std::fmod(2.0f * u5, 1.0f));
+            // Φ_k / p_k, with Φ_k = 2π·A_k·L_k: the triangle's colour rides on the photon's power.
+            out.power = 2.0f * kPi * triangle_area(t) * scene_.materials()[t.material].emission / emitter_probability_[k];
+            return out;
+        }
+        case Kind::world: {
+            // Parallel rays from a disc covering the bounding sphere, placed outside it, in a uniform direction.
+            EmissionSample out;
+            out.direction = sample_uniform_sphere(u1, u2);
+            glm::vec3 b1, b2;
+            orthonormal_basis(out.direction, b1, b2);
+            const float r = radius_ * std::sqrt(u3), phi = 2.0f * kPi * u4;
+            out.origin = center_ - 2.0f * radius_ * out.direction + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
+            out.power = source.flux;
+            return out;
+        }
+    }
+    return {};
+}
+
+}  // namespace ps

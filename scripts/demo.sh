@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# README command (1): install what is missing, build, and render the demo scene (a Cornell box with a glass
+# and a mirror sphere) through Blender in the background with the Photon Splat engine. Prints the PNG's path.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$root/scripts/install-deps.sh"
+bash "$root/scripts/build.sh"
+
+out_dir="$root/build/demo"
+mkdir -p "$out_dir"
+rm -f "$out_dir"/cornell_caustics_*.png
+BLENDER_USER_SCRIPTS="$root/build/blender" blender -b --factory-startup -noaudio --addons photonsplat \
+  "$root/blend_scenes/cornell_caustics.blend" -E PHOTONSPLAT \
+  -o "$out_dir/cornell_caustics_###" -F PNG -f 1
+png="$out_dir/cornell_caustics_001.png"
+if [ ! -s "$png" ]; then
+  echo "demo: Blender did not write $png (see the log above)" >&2
+  exit 1
+fi
+echo "$png"

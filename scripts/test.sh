@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# README command (2): install what is missing, build, and run every test: the native GoogleTest suite (ctest),
+# the Python API tests (pytest on /usr/bin/python3) and the Blender tests (pytest inside blender -b).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$root/scripts/install-deps.sh"
+bash "$root/scripts/build.sh"
+
+scratch="$(mktemp -d)"
+trap 'rm -rf "$scratch"' EXIT
+status=0
+
+echo "== native tests (ctest)"
+ctest --test-dir "$root/build" --output-on-failure --timeout 300 || status=1
+
+echo "== Python API tests (pytest)"
+(cd "$root" && /usr/bin/python3 -m pytest -q -p no:cacheprovider tests/python) || status=1
+
+echo "== Blender tests (pytest inside blender -b)"
+(cd "$root" && BLENDER_USER_SCRIPTS="$root/build/blender" TMPDIR="$scratch" \
+  blender -b --factory-startup -noaudio --python-exit-code 1 --addons photonsplat \
+  --python tests/blender/run_pytest.py -- -q -p no:cacheprovider tests/blender) || status=1
+
+exit $status
