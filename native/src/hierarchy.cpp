@@ -64,8 +64,8 @@ public:
         : orthographic_(params.orthographic), near_(params.near_clip) {
         const double tiles = tiles_y(params);
         const double half = params.vertical_half_extent;
-        // Perspective: the ratio between consecutive slice depths; a slice is then as thick as a tile is tall.
-        // Orthographic: the slice thickness, one tile's height (2·half/tilesY) in world units.
+        // Perspective: ln of the ratio between consecutive slice depths (a slice is then as thick as a tile is
+        // tall). Orthographic: the slice thickness in world units.
         step_ = orthographic_ ? 2.0 * half / tiles : std::log1p(2.0 * half / tiles);
     }
 
@@ -120,16 +120,6 @@ struct Box {
     }
 };
 
-// Bounding box of the finite positions of the samples seen through mirrors/glass: their 3D keys quantise on it.
-Box via_specular_bounds(const ViewSamples& samples) {
-    Box box;
-    for (const ViewSample& s : samples.samples)
-        if ((s.flags & kViaSpecular) && std::isfinite(s.position.x) && std::isfinite(s.position.y) &&
-            std::isfinite(s.position.z))
-            box.add(s.position);
-    return box;
-}
-
 struct KeyedSample {
     uint64_t key;
     uint32_t index;
@@ -139,15 +129,20 @@ struct KeyedSample {
 std::vector<KeyedSample> key_samples(const ViewSamples& samples, const ClusterKeyParams& params) {
     const size_t n = samples.samples.size();
     const uint32_t pixels = uint32_t(params.width) * uint32_t(params.height);
-    for (size_t i = 0; i < n; ++i) {  // serial, so that the message names the FIRST bad sample
+    // One serial pass (so that a message names the FIRST bad sample) also finds the box on which the samples
+    // seen through mirrors/glass are quantised: the box of their finite positions.
+    Box specular;
+    for (size_t i = 0; i < n; ++i) {
         const ViewSample& s = samples.samples[i];
-        if (!(s.flags & kViaSpecular) && s.pixel >= pixels)
+        if (s.flags & kViaSpecular) {
+            if (std::isfinite(s.position.x) && std::isfinite(s.position.y) && std::isfinite(s.position.z))
+                specular.add(s.position);
+        } else if (s.pixel >= pixels) {
             throw InvalidInput("view sample " + std::to_string(i) + " pixel",
                                std::to_string(s.pixel) + " is outside the " + std::to_string(params.width) + "x" +
                                    std::to_string(params.height) + " image");
+        }
     }
-
-    const Box specular = via_specular_bounds(samples);
     glm::dvec3 specular_scale(0.0);  // grid cells per unit length; 0 on an axis of zero extent
     for (int a = 0; a < 3; ++a) {
         const double extent = double(specular.hi[a]) - double(specular.lo[a]);

@@ -89,9 +89,9 @@ ChunkPairs traverse_chunk(const ClusterHierarchy& hierarchy, const std::vector<g
 // Per-leaf photon lists in CSR form: the photons of node n are photons[offsets[n], offsets[n + 1]).
 // Indexed by node (internal nodes have empty lists), which saves a node → leaf map.
 struct PhotonLists {
-    std::vector<uint32_t> offsets;
+    std::vector<size_t> offsets;    // size_t: the pairs of a large radius can outnumber 2^32
     std::vector<uint32_t> photons;
-    size_t bytes() const { return (offsets.capacity() + photons.capacity()) * sizeof(uint32_t); }
+    size_t bytes() const { return offsets.capacity() * sizeof(size_t) + photons.capacity() * sizeof(uint32_t); }
 };
 
 // A stable counting sort by node: chunks are visited in photon order, so every list is ascending.
@@ -102,7 +102,7 @@ PhotonLists sort_pairs_by_leaf(std::vector<ChunkPairs>& chunks, size_t node_coun
         for (const LeafPhotonPair& pair : chunk.pairs) ++lists.offsets[pair.node + 1];
     for (size_t n = 0; n < node_count; ++n) lists.offsets[n + 1] += lists.offsets[n];
     lists.photons.resize(lists.offsets[node_count]);
-    std::vector<uint32_t> cursor(lists.offsets.begin(), lists.offsets.end() - 1);
+    std::vector<size_t> cursor(lists.offsets.begin(), lists.offsets.end() - 1);
     for (ChunkPairs& chunk : chunks) {
         for (const LeafPhotonPair& pair : chunk.pairs) lists.photons[cursor[pair.node]++] = pair.photon;
         chunk.pairs = {};  // release as we go: the pairs and the lists are the two largest buffers
@@ -172,12 +172,12 @@ std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const Vi
                 const uint32_t leaf = leaves[l];
                 const ClusterNode& node = hierarchy.nodes[leaf];
                 const uint32_t* list = lists.photons.data() + lists.offsets[leaf];
-                const uint32_t list_size = lists.offsets[leaf + 1] - lists.offsets[leaf];
+                const size_t list_size = lists.offsets[leaf + 1] - lists.offsets[leaf];
                 for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                     const uint32_t i = hierarchy.sample_order[k];
                     const ViewSample& s = views[i];
                     glm::dvec3 reflected_flux(0.0);
-                    for (uint32_t m = 0; m != list_size; ++m) {
+                    for (size_t m = 0; m != list_size; ++m) {
                         const uint32_t j = list[m];
                         if (!photon_reaches_sample(s, positions[j], photons.photons[j], params)) continue;
                         reflected_flux += photon_reflected_flux(s, photons.photons[j]);
