@@ -1,0 +1,164 @@
+"""The Photon Splat render engine as Blender sees it: F12 / `blender -b ... -E PHOTONSPLAT -f 1`.
+
+Kept thin on purpose: export/ converts the scene, the native core renders it, and this file only moves
+pixels, progress and messages between the two. Rules of Blender 3.4 that shape it:
+  - end_result() must run whatever happens (an exception with an open result crashes Blender when the
+    image is written), hence the try/finally;
+  - no exception may escape render(): errors become self.report({'ERROR'}, ...) + error_set();
+  - the core releases the GIL while it works and calls our progress callback on this thread, which is where
+    Blender calls (update_progress, test_break) are allowed.
+"""
+
+import importlib
+import sys
+import time
+import traceback
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from . import export
+
+# Warnings beyond this many are summarised in one line: a scene with 500 odd materials should not bury
+# the render report.
+MAX_WARNINGS_SHOWN = 20
+
+
+class CoreUnavailable(Exception):
+    """The compiled module (photonsplat._core) is missing or failed to load."""
+
+
+def load_core():
+    """The compiled core module; raises CoreUnavailable with a readable reason."""
+    package = sys.modules[__package__]
+    # The package tried the import already; it keeps the reason when that failed.
+    reason = getattr(package, "CORE_IMPORT_ERROR", None)
+    if reason is None:
+        try:
+            return importlib.import_module("._core", __package__)
+        except Exception as error:  # any failure to load is reported the same way
+            reason = f"the native module photonsplat._core could not be loaded: {error}"
+    raise CoreUnavailable(f"{reason}. Build the project (see README) and use the add-on laid out in "
+                          "build/blender/addons")
+
+
+@dataclass
+class RenderOutcome:
+    """What the last final render did: bpy.ops.render.render() only returns {'FINISHED'}, so scripts and
+    tests read this instead (engine.last_outcome)."""
+    status: str = "none"        # "finished" | "cancelled" | "failed"
+    message: str = ""
+    warnings: list = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+
+last_outcome = RenderOutcome()
+
+
+class PhotonSplatRenderEngine(bpy.types.RenderEngine):
+    bl_idname = "PHOTONSPLAT"
+    bl_label = "Photon Splat"
+    bl_use_preview = False               # no fast material-preview path yet
+    bl_use_eevee_viewport = True         # Material Preview stays EEVEE
+    bl_use_shading_nodes_custom = False  # keep Cycles' shader nodes and the Shader Editor
+    bl_use_postprocess = True            # let the compositor run on our result
+
+    def render(self, depsgraph):
+        global last_outcome
+        started = time.perf_counter()
+        width, height = export.camera.resolution(depsgraph.scene)
+        result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
+        outcome = RenderOutcome()
+        try:
+            self._render_into(result, depsgraph, outcome)
+        except Exception as error:
+            outcome.status = "failed"
+            outcome.message = _describe(error)
+            if not isinstance(error, (export.ExportError, CoreUnavailable, ValueError)):
+                traceback.print_exc()      # unexpected: keep the traceback for the console / bug reports
+            self.report({'ERROR'}, f"Photon Splat: {outcome.message}")
+            self.error_set(outcome.message)
+        finally:
+            self.end_result(result, cancel=outcome.status == "cancelled")
+            outcome.seconds = time.perf_counter() - started
+            last_outcome = outcome
+
+    def _render_into(self, result, depsgraph, outcome):
+        core = load_core()
+        self.update_stats("", "Photon Splat | Exporting scene")
+        frame = export.export_frame(core, depsgraph, camera_override=self.camera_override)
+        outcome.warnings = frame.warnings
+        self._report_warnings(frame.warnings)
+        if self._cancel_requested():
+            self._cancelled(outcome)
+            return
+
+        def on_progress(stage, fraction):
+            self.update_progress(min(max(float(fraction), 0.0), 1.0))
+            self.update_stats("", f"Photon Splat | {stage} {100.0 * fraction:.0f}%")
+            return self._cancel_requested()
+
+        try:
+            image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+        except core.Cancelled:
+            self._cancelled(outcome)
+            return
+
+        image = np.asarray(image, dtype=np.float32)
+        if image.shape != (frame.height, frame.width, 4):
+            raise RuntimeError(f"the core returned an image of shape {image.shape}, "
+                               f"expected {(frame.height, frame.width, 4)}")
+        # The core's row 0 is the top of the image; Blender's is the bottom.
+        pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
+        result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+
+        outcome.status = "finished"
+        outcome.stats = stats
+        outcome.message = _summary(frame, stats, depsgraph.scene.photonsplat.photons)
+        self.update_progress(1.0)
+        self.update_stats("", f"Photon Splat | {outcome.message}")
+
+    def _cancel_requested(self):
+        """True once the user pressed Esc. (A separate method so tests can simulate Esc: Blender looks up
+        test_break itself on the C side, so it cannot be replaced from Python.)"""
+        return self.test_break()
+
+    def _cancelled(self, outcome):
+        outcome.status = "cancelled"
+        outcome.message = "render cancelled"
+        self.update_stats("", "Photon Splat | Cancelled")
+        self.report({'WARNING'}, "Photon Splat: render cancelled")
+
+    def _report_warnings(self, warnings):
+        for line in warnings[:MAX_WARNINGS_SHOWN]:
+            self.report({'WARNING'}, f"Photon Splat: {line}")
+        if len(warnings) > MAX_WARNINGS_SHOWN:
+            self.report({'WARNING'}, f"Photon Splat: {len(warnings) - MAX_WARNINGS_SHOWN} more warnings not shown")
+
+
+def _describe(error):
+    """One-line message for the user; the exception type only where the message alone would be cryptic."""
+    text = str(error).strip() or type(error).__name__
+    if isinstance(error, (export.ExportError, CoreUnavailable, ValueError)):
+        return text
+    return f"{type(error).__name__}: {text}"
+
+
+def _summary(frame, stats, photons):
+    """The line shown in the status bar after a render: photons, scene size, radius used, time."""
+    seconds, values = stats.get("seconds", {}), stats.get("values", {})
+    total = seconds.get("total", sum(seconds.values()))
+    text = f"{photons:,} photons | {frame.triangles:,} triangles | {frame.lights} lights"
+    if "radius" in values:
+        text += f" | radius {values['radius']:.4g}"
+    return text + f" | {total:.2f} s"
+
+
+def register():
+    bpy.utils.register_class(PhotonSplatRenderEngine)
+
+
+def unregister():
+    bpy.utils.unregister_class(PhotonSplatRenderEngine)

@@ -1,0 +1,337 @@
+"""Blender materials -> the core's three surface types (diffuse, mirror, glass) plus emission.
+
+The core knows only:
+  diffuse  Lambertian reflection, albedo = colour
+  mirror   perfect specular reflection, Fresnel-Schlick with F0 = colour (a smooth metal)
+  glass    smooth dielectric with index `ior`, refracted light tinted by colour
+and every surface may also emit radiance `emission` (W/(sr m^2), both faces, as Cycles' Emission shader).
+
+We read the node tree Cycles would render (get_output_node('CYCLES')) and map the shader plugged into the
+Surface input. Whatever cannot be represented exactly is replaced by the nearest supported surface, and a
+note says so; export/__init__.py turns the notes into one warning per material in the render report.
+
+Known approximations that are NOT warned about, because they apply to nearly every material:
+  - Principled BSDF's dielectric specular layer (Specular input, about 4 % reflectance) is dropped, and its
+    diffuse lobe is rendered as Lambert (Cycles adds a slight retro-reflection depending on Roughness).
+  - Roughness below ROUGHNESS_SHARP is rendered as a perfectly smooth interface (Cycles' alpha = r^2 is then
+    below 0.0025, visually sharp).
+"""
+
+from dataclasses import dataclass, field
+
+# Above this roughness a glossy or glass surface visibly blurs in Cycles; we still render it sharp and warn.
+ROUGHNESS_SHARP = 0.05
+
+# Cycles renders objects without a material with a plain grey diffuse surface; so do we.
+DEFAULT_COLOR = (0.8, 0.8, 0.8)
+DEFAULT_MATERIAL_NAME = "Photon Splat default"
+
+BLACK = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class MaterialSpec:
+    """One material as the core's add_material() takes it, plus the notes gathered while converting it."""
+    name: str
+    kind: str = "diffuse"          # "diffuse" | "mirror" | "glass"
+    color: tuple = DEFAULT_COLOR
+    ior: float = 1.45
+    emission: tuple = BLACK
+    notes: list = field(default_factory=list)
+    # True when the shader reflects no light at all (an Emission shader, an unconnected shader socket):
+    # mixing it with a real surface then only scales that surface.
+    no_surface: bool = False
+
+    def core_arguments(self):
+        """Keyword arguments for core Scene.add_material()."""
+        return dict(name=self.name, kind=self.kind, color=tuple(self.color), ior=float(self.ior),
+                    emission=tuple(self.emission))
+
+    def describe(self):
+        """Short human description, e.g. for the material panel: 'glass, IOR 1.50'."""
+        text = self.kind
+        if self.kind == "glass":
+            text += f", IOR {self.ior:.2f}"
+        if any(c > 0.0 for c in self.emission):
+            text += ", emitting"
+        return text
+
+
+def default_material():
+    return MaterialSpec(name=DEFAULT_MATERIAL_NAME)
+
+
+def convert_material(material):
+    """Map a Blender material (or None) to a MaterialSpec. Never raises for odd node setups."""
+    if material is None:
+        return default_material()
+    name = material.name_full
+
+    if not material.use_nodes or material.node_tree is None:
+        # Without nodes Cycles shades the material as a diffuse surface of its viewport colour.
+        spec = MaterialSpec(name=name, color=_color(material.diffuse_color))
+        return _finish(spec)
+
+    output = material.node_tree.get_output_node('CYCLES')
+    if output is None:
+        spec = MaterialSpec(name=name)
+        spec.notes.append("no Material Output node, rendered as default grey diffuse")
+        return _finish(spec)
+
+    surface = output.inputs["Surface"]
+    if not surface.is_linked:
+        # Cycles renders an unconnected Surface as black.
+        spec = MaterialSpec(name=name, color=BLACK)
+        return _finish(spec)
+
+    spec = _convert_shader(source_node(surface), name)
+    spec.name = name
+    return _finish(spec)
+
+
+def _finish(spec):
+    """Clamp colours into the range the core accepts (albedo and tints in [0, 1], emission >= 0)."""
+    clamped = tuple(min(max(c, 0.0), 1.0) for c in spec.color)
+    if clamped != tuple(spec.color):
+        spec.notes.append("colour outside [0, 1] clamped")
+    spec.color = clamped
+    spec.emission = tuple(max(c, 0.0) for c in spec.emission)
+    return spec
+
+
+# --- shader nodes ---------------------------------------------------------------------------------------------
+
+def _convert_shader(node, name):
+    """Convert the shader node `node` (may be None: an unconnected shader socket)."""
+    if node is None:
+        # An unconnected shader socket adds nothing: no surface and no light.
+        return MaterialSpec(name=name, color=BLACK, no_surface=True)
+    converter = _SHADERS.get(node.bl_idname)
+    if converter is not None:
+        return converter(node, name)
+    return _unsupported_shader(node, name)
+
+
+def _principled(node, name):
+    notes = []
+    base = color_input(node, "Base Color", notes)
+    metallic = _clamp01(float_input(node, "Metallic", notes))
+    transmission = _clamp01(float_input(node, "Transmission", notes))
+    roughness = float_input(node, "Roughness", notes)
+    ior = float_input(node, "IOR", notes)
+    emission = _scaled(color_input(node, "Emission", notes), float_input(node, "Emission Strength", notes))
+
+    # Cycles 3.4 weights: metal = metallic, glass = transmission * (1 - metallic),
+    # diffuse = (1 - metallic)(1 - transmission). We keep the dominant lobe; metal wins ties like in Cycles.
+    if metallic >= 0.5:
+        spec = MaterialSpec(name=name, kind="mirror", color=base)
+        if metallic < 1.0:
+            notes.append(f"Metallic {metallic:.2f} rendered as a pure metal")
+        _note_rough(notes, roughness)
+    elif transmission >= 0.5:
+        spec = MaterialSpec(name=name, kind="glass", color=base, ior=ior)
+        if transmission < 1.0 or metallic > 0.0:
+            notes.append(f"Transmission {transmission:.2f} rendered as pure glass")
+        _note_rough(notes, roughness)
+    else:
+        subsurface = _clamp01(float_input(node, "Subsurface", notes))
+        color = base
+        if subsurface > 0.0:
+            # Cycles' subsurface albedo blends towards Subsurface Color; diffuse with that colour is close.
+            color = _mix(base, color_input(node, "Subsurface Color", notes), subsurface)
+            notes.append("subsurface scattering rendered as diffuse")
+        spec = MaterialSpec(name=name, kind="diffuse", color=color)
+        if metallic > 0.0 or transmission > 0.0:
+            notes.append(f"Metallic {metallic:.2f} / Transmission {transmission:.2f} ignored (rendered diffuse)")
+
+    if float_input(node, "Alpha", notes) < 1.0:
+        notes.append("Alpha ignored (rendered opaque)")
+    if float_input(node, "Clearcoat", notes) > 0.0:
+        notes.append("clearcoat ignored")
+    if float_input(node, "Sheen", notes) > 0.0:
+        notes.append("sheen ignored")
+    if node.inputs["Normal"].is_linked:
+        notes.append("normal/bump map ignored")
+    spec.emission = emission
+    spec.notes = notes
+    return spec
+
+
+def _diffuse(node, name):
+    notes = []
+    spec = MaterialSpec(name=name, kind="diffuse", color=color_input(node, "Color", notes))
+    if float_input(node, "Roughness", notes) > 0.0:
+        notes.append("Oren-Nayar roughness ignored (rendered Lambertian)")
+    spec.notes = notes
+    return spec
+
+
+def _glossy(node, name):
+    notes = []
+    spec = MaterialSpec(name=name, kind="mirror", color=color_input(node, "Color", notes))
+    _note_rough(notes, float_input(node, "Roughness", notes))
+    if node.bl_idname == "ShaderNodeBsdfAnisotropic":
+        notes.append("anisotropy ignored")
+    spec.notes = notes
+    return spec
+
+
+def _glass(node, name):
+    notes = []
+    spec = MaterialSpec(name=name, kind="glass", color=color_input(node, "Color", notes),
+                        ior=float_input(node, "IOR", notes))
+    _note_rough(notes, float_input(node, "Roughness", notes))
+    if node.bl_idname == "ShaderNodeBsdfRefraction":
+        notes.append("Refraction BSDF rendered as glass (with Fresnel reflection)")
+    spec.notes = notes
+    return spec
+
+
+def _transparent(node, name):
+    # A dielectric of index 1 neither bends nor reflects light: exactly a tinted transparent surface.
+    notes = []
+    return MaterialSpec(name=name, kind="glass", color=color_input(node, "Color", notes), ior=1.0, notes=notes)
+
+
+def _emission(node, name):
+    notes = []
+    radiance = _scaled(color_input(node, "Color", notes), float_input(node, "Strength", notes))
+    return MaterialSpec(name=name, kind="diffuse", color=BLACK, emission=radiance, notes=notes,
+                        no_surface=True)
+
+
+def _holdout(node, name):
+    return MaterialSpec(name=name, color=BLACK, notes=["Holdout rendered as black"])
+
+
+def _mix_shader(node, name):
+    notes = []
+    fac = _clamp01(float_input(node, "Fac", notes))
+    # Inputs 1 and 2 are the two shader sockets (both are called "Shader").
+    first = _convert_shader(source_node(node.inputs[1]), name)
+    second = _convert_shader(source_node(node.inputs[2]), name)
+    spec = _combine(first, 1.0 - fac, second, fac, "Mix Shader", notes)
+    spec.notes = first.notes + second.notes + notes
+    return spec
+
+
+def _add_shader(node, name):
+    notes = []
+    first = _convert_shader(source_node(node.inputs[0]), name)
+    second = _convert_shader(source_node(node.inputs[1]), name)
+    spec = _combine(first, 1.0, second, 1.0, "Add Shader", notes)
+    spec.notes = first.notes + second.notes + notes
+    return spec
+
+
+def _combine(first, w1, second, w2, what, notes):
+    """Weighted sum of two converted shaders, as Cycles sums closures.
+
+    Emission adds exactly, and so do two diffuse surfaces (their albedos add). When one side has no surface
+    (an Emission shader or an unconnected socket) the other one's colour is scaled by its weight: exact for
+    diffuse, close for mirror and glass (whose Fresnel reflection is not scaled). Two different surface types
+    cannot be blended by the core: the heavier one is kept and a note says so."""
+    emission = tuple(w1 * a + w2 * b for a, b in zip(first.emission, second.emission))
+    spec = MaterialSpec(name=first.name, emission=emission)
+    if first.no_surface and second.no_surface:
+        spec.color, spec.no_surface = BLACK, True
+    elif first.no_surface or second.no_surface:
+        kept, weight = (second, w2) if first.no_surface else (first, w1)
+        spec.kind, spec.color, spec.ior = kept.kind, _scaled(kept.color, weight), kept.ior
+    elif first.kind == "diffuse" and second.kind == "diffuse":
+        spec.color = tuple(w1 * a + w2 * b for a, b in zip(first.color, second.color))
+    else:
+        kept, weight = (first, w1) if w1 >= w2 else (second, w2)
+        spec.kind, spec.color, spec.ior = kept.kind, kept.color, kept.ior
+        notes.append(f"{what} of {first.kind} and {second.kind} rendered as {kept.kind} alone")
+    return spec
+
+
+def _unsupported_shader(node, name):
+    """Translucent, Subsurface, Velvet, Toon, Hair, groups...: a diffuse surface of its colour, if it has one."""
+    notes = []
+    if "Color" in node.inputs:
+        color = color_input(node, "Color", notes)
+    else:
+        color = DEFAULT_COLOR
+    notes.append(f"unsupported shader '{node.bl_label}' rendered as diffuse")
+    return MaterialSpec(name=name, kind="diffuse", color=color, notes=notes)
+
+
+_SHADERS = {
+    "ShaderNodeBsdfPrincipled": _principled,
+    "ShaderNodeBsdfDiffuse": _diffuse,
+    "ShaderNodeBsdfGlossy": _glossy,
+    "ShaderNodeBsdfAnisotropic": _glossy,
+    "ShaderNodeBsdfGlass": _glass,
+    "ShaderNodeBsdfRefraction": _glass,
+    "ShaderNodeBsdfTransparent": _transparent,
+    "ShaderNodeEmission": _emission,
+    "ShaderNodeHoldout": _holdout,
+    "ShaderNodeMixShader": _mix_shader,
+    "ShaderNodeAddShader": _add_shader,
+}
+
+
+# --- reading socket values ------------------------------------------------------------------------------------
+
+def source_node(socket):
+    """The node feeding `socket`, looking through reroutes; None when unconnected or the link is muted."""
+    while socket.is_linked:
+        link = socket.links[0]
+        if getattr(link, "is_muted", False):
+            return None
+        node = link.from_node
+        if node.bl_idname != "NodeReroute":
+            return node
+        socket = node.inputs[0]
+    return None
+
+
+def _input_value(node, socket_name, notes):
+    """Value of an input socket. A constant node (RGB, Value) plugged in is read; for anything else
+    (textures, math...) the socket's own unconnected value is used and a note says so."""
+    socket = node.inputs[socket_name]
+    if socket.is_linked:
+        source = source_node(socket)
+        if source is not None and source.bl_idname in ("ShaderNodeRGB", "ShaderNodeValue"):
+            return source.outputs[0].default_value
+        if source is not None:
+            notes.append(f"'{socket_name}' driven by a {source.bl_label} node: its unconnected value used")
+    return socket.default_value
+
+
+def color_input(node, socket_name, notes):
+    return _color(_input_value(node, socket_name, notes))
+
+
+def float_input(node, socket_name, notes):
+    value = _input_value(node, socket_name, notes)
+    if isinstance(value, (int, float)):
+        return float(value)
+    rgb = _color(value)                    # a colour plugged into a number: Cycles takes its average
+    return sum(rgb) / 3.0
+
+
+def _color(value):
+    """An RGB(A) value or a single number, as an (r, g, b) tuple of floats."""
+    if isinstance(value, (int, float)):
+        return (float(value),) * 3
+    return tuple(float(c) for c in tuple(value)[:3])
+
+
+def _scaled(rgb, factor):
+    return tuple(c * factor for c in rgb)
+
+
+def _mix(a, b, t):
+    return tuple((1.0 - t) * x + t * y for x, y in zip(a, b))
+
+
+def _clamp01(value):
+    return min(max(value, 0.0), 1.0)
+
+
+def _note_rough(notes, roughness):
+    if roughness > ROUGHNESS_SHARP:
+        notes.append(f"Roughness {roughness:.2f} rendered perfectly smooth")

@@ -1,0 +1,220 @@
+"""Properties-editor panels for Photon Splat.
+
+Our own panels: the render settings (scene.photonsplat), and light / material / world panels that show only
+what Photon Splat renders (EEVEE's panels show EEVEE-only options, Cycles' need the Cycles add-on). Blender's
+generic panels (output, dimensions, format, colour management, camera...) are opened to our engine by adding
+its id to their COMPAT_ENGINES, the way Cycles does it.
+"""
+
+import bpy
+from bpy.types import Panel
+
+from . import engine
+from .export import materials
+
+ENGINE_ID = engine.PhotonSplatRenderEngine.bl_idname
+
+
+class PhotonSplatPanel:
+    """Mix-in: a Properties-editor panel shown only while Photon Splat is the render engine."""
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    COMPAT_ENGINES = {ENGINE_ID}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+
+def _draw_core_status(layout):
+    """An error box when the native module cannot be loaded (the add-on stays usable otherwise)."""
+    try:
+        engine.load_core()
+    except engine.CoreUnavailable as error:
+        box = layout.box()
+        box.alert = True
+        box.label(text="Photon Splat cannot render:", icon='ERROR')
+        for line in _wrap(str(error), 60):        # labels do not wrap by themselves
+            box.label(text=line)
+
+
+def _wrap(text, width):
+    lines, line = [], ""
+    for word in text.split():
+        if line and len(line) + 1 + len(word) > width:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    return lines + [line] if line else lines
+
+
+def _draw_notes(layout, notes):
+    for note in notes:
+        layout.label(text=note, icon='INFO')
+
+
+# --- render settings -----------------------------------------------------------------------------------------
+
+class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
+    bl_label = "Photon Splat"
+    bl_context = "render"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        _draw_core_status(layout)
+        settings = context.scene.photonsplat
+        col = layout.column()
+        col.prop(settings, "photons")
+        col.prop(settings, "radius")
+        col.prop(settings, "method")
+        col = layout.column()
+        col.prop(settings, "max_bounces")
+        col.prop(settings, "direct_samples")
+        col.prop(settings, "seed")
+
+
+class RENDER_PT_photonsplat_performance(PhotonSplatPanel, Panel):
+    bl_label = "Performance"
+    bl_context = "render"
+    bl_parent_id = "RENDER_PT_photonsplat"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.scene.photonsplat, "threads")
+
+
+# --- lights, materials, world ---------------------------------------------------------------------------------
+
+class DATA_PT_photonsplat_light(PhotonSplatPanel, Panel):
+    bl_label = "Light"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return context.light is not None and super().poll(context)
+
+    def draw(self, context):
+        light = context.light
+        layout = self.layout
+        layout.row().prop(light, "type", expand=True)
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        col = layout.column()
+        col.prop(light, "color")
+        col.prop(light, "energy")
+        if light.type in {'POINT', 'SPOT'}:
+            col.prop(light, "shadow_soft_size", text="Radius")
+        elif light.type == 'SUN':
+            col.prop(light, "angle")
+        elif light.type == 'AREA':
+            col.prop(light, "shape")
+            if light.shape in {'SQUARE', 'DISK'}:
+                col.prop(light, "size")
+            else:
+                col.prop(light, "size", text="Size X")
+                col.prop(light, "size_y", text="Y")
+        if light.type == 'SPOT':
+            col.label(text="The spot cone is not rendered yet (lit like a point light)", icon='INFO')
+        elif light.type == 'AREA' and light.shape in {'DISK', 'ELLIPSE'}:
+            col.label(text="Rendered as a rectangle of the same area", icon='INFO')
+
+
+class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
+    bl_label = "Surface"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        return context.material is not None and super().poll(context)
+
+    def draw(self, context):
+        material = context.material
+        layout = self.layout
+        layout.prop(material, "use_nodes", icon='NODETREE')
+        if material.use_nodes and material.node_tree is not None:
+            output = material.node_tree.get_output_node('CYCLES')
+            if output is not None:
+                layout.template_node_view(material.node_tree, output, output.inputs["Surface"])
+        else:
+            layout.prop(material, "diffuse_color", text="Color")
+        # Say how Photon Splat interprets this material, with what it had to approximate.
+        spec = materials.convert_material(material)
+        layout.separator()
+        layout.label(text=f"Photon Splat renders it as: {spec.describe()}")
+        _draw_notes(layout, spec.notes)
+
+
+class WORLD_PT_photonsplat_surface(PhotonSplatPanel, Panel):
+    bl_label = "Surface"
+    bl_context = "world"
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and super().poll(context)
+
+    def draw(self, context):
+        world = context.world
+        layout = self.layout
+        layout.prop(world, "use_nodes", icon='NODETREE')
+        if world.use_nodes and world.node_tree is not None:
+            output = world.node_tree.get_output_node('CYCLES')
+            if output is not None:
+                layout.template_node_view(world.node_tree, output, output.inputs["Surface"])
+        else:
+            layout.prop(world, "color")
+
+
+# --- Blender's own panels ------------------------------------------------------------------------------------
+
+# Panels made for every engine ('BLENDER_RENDER' in their COMPAT_ENGINES) that do not apply to us:
+# our own light panel replaces the light ones, and we render neither Freestyle nor previews.
+_EXCLUDED_PANELS = {
+    "DATA_PT_light", "DATA_PT_area", "DATA_PT_preview", "DATA_PT_falloff_curve",
+    "RENDER_PT_freestyle", "MATERIAL_PT_freestyle_line",
+}
+# EEVEE panels that are engine-neutral in fact: the material slot list.
+_EXTRA_PANELS = {"EEVEE_MATERIAL_PT_context_material"}
+
+_opened_panels = []
+
+
+def _generic_panels():
+    for panel in bpy.types.Panel.__subclasses__():
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if engines is None or ENGINE_ID in engines:
+            continue
+        name = panel.__name__
+        if name in _EXTRA_PANELS or ('BLENDER_RENDER' in engines and name not in _EXCLUDED_PANELS
+                                     and not name.startswith("VIEWLAYER_PT_freestyle")):
+            yield panel
+
+
+_classes = (
+    RENDER_PT_photonsplat,
+    RENDER_PT_photonsplat_performance,
+    DATA_PT_photonsplat_light,
+    MATERIAL_PT_photonsplat_surface,
+    WORLD_PT_photonsplat_surface,
+)
+
+
+def register():
+    for cls in _classes:
+        bpy.utils.register_class(cls)
+    for panel in _generic_panels():
+        panel.COMPAT_ENGINES.add(ENGINE_ID)
+        _opened_panels.append(panel)
+
+
+def unregister():
+    for panel in _opened_panels:
+        panel.COMPAT_ENGINES.discard(ENGINE_ID)
+    _opened_panels.clear()
+    for cls in reversed(_classes):
+        bpy.utils.unregister_class(cls)

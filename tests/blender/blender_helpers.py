@@ -1,0 +1,65 @@
+"""Helpers shared by the tests that run inside Blender: open the project's scenes, render them, read pixels."""
+
+from pathlib import Path
+
+import bpy
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[2]
+BLEND_SCENES = REPO / "blend_scenes"
+
+
+def open_scene(name):
+    """Open blend_scenes/<name>.blend: every test starts from the file as saved."""
+    bpy.ops.wm.open_mainfile(filepath=str(BLEND_SCENES / f"{name}.blend"), load_ui=False)
+    return bpy.context.scene
+
+
+def use_photonsplat(scene, size, photons, **settings):
+    """Switch `scene` to Photon Splat at size x size pixels with the given settings."""
+    scene.render.engine = 'PHOTONSPLAT'
+    scene.render.resolution_x = scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.photonsplat.photons = photons
+    for key, value in settings.items():
+        setattr(scene.photonsplat, key, value)
+
+
+def render_pixels(path):
+    """Render the current scene with bpy.ops (as F12 does) into the OpenEXR file `path` and read it back.
+
+    Returns float32 (height, width, 4) linear pixels with row 0 at the BOTTOM (Blender's order)."""
+    scene = bpy.context.scene
+    scene.render.filepath = str(path)
+    scene.render.use_file_extension = False
+    settings = scene.render.image_settings
+    settings.file_format = 'OPEN_EXR'
+    settings.color_mode = 'RGBA'
+    settings.color_depth = '32'
+    bpy.ops.render.render(write_still=True)
+    return read_exr(path)
+
+
+def read_exr(path):
+    image = bpy.data.images.load(str(path), check_existing=False)
+    try:
+        width, height = image.size
+        pixels = np.empty(width * height * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        return pixels.reshape(height, width, 4)
+    finally:
+        bpy.data.images.remove(image)
+
+
+def pixel_of(scene, camera, point):
+    """(row, column) of the pixel showing world `point`, rows counted from the bottom; None if off-screen."""
+    from bpy_extras.object_utils import world_to_camera_view
+    from mathutils import Vector
+
+    x, y, depth = world_to_camera_view(scene, camera, Vector(point))
+    width = scene.render.resolution_x * scene.render.resolution_percentage // 100
+    height = scene.render.resolution_y * scene.render.resolution_percentage // 100
+    column, row = int(x * width), int(y * height)
+    if depth <= 0.0 or not (0 <= column < width and 0 <= row < height):
+        return None
+    return row, column
