@@ -382,6 +382,131 @@ TEST(SplatCluster, ReportsCountersAndBytes) {
     EXPECT_LT(c.cluster.counters.at("photon_sample_tests"), 0.2 * c.brute.counters.at("photon_sample_tests"));
 }
 
+// Bounded memory: photons are splatted in batches whose pairs stay under SplatParams::max_pairs_in_memory, and
+// the output must not depend on where the batches end.
+struct BatchCase {
+    SplatParams params;
+    ClusterHierarchy hierarchy;
+};
+
+double peak_pair_bytes(const Stats& stats) { return stats.bytes.at("leaf_photon_lists"); }
+
+// What the pair buffers may hold under a cap: each pair twice (traversal buffer, then the lists) with growth
+// slack, so 16 bytes per pair of the cap, plus the per-node offsets of the lists, which do not depend on it.
+double pair_bytes_bound(uint64_t cap, const ClusterHierarchy& hierarchy) {
+    return 16.0 * double(cap) + double(sizeof(size_t) * (hierarchy.nodes.size() + 2));
+}
+
+TEST(SplatCluster, TinyPairCapWithRadiusLargerThanTheSceneMatchesBruteBitForBit) {
+    constexpr uint64_t kCap = 1000;
+    for (uint32_t seed = 1; seed <= 3; ++seed) {
+        SCOPED_TRACE("seed " + std::to_string(seed));
+        std::mt19937 rng(seed);
+        const ViewSamples vs = random_view_samples(SceneOptions{}, rng);
+        const PhotonMap map = random_photons(vs, 1500, 0.5f, rng);
+        const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(48, 40));
+        SplatParams params = splat_params(1e3f, map);
+        params.max_pairs_in_memory = kCap;
+        const Comparison c = compare_with_brute(vs, map, params, key_params(48, 40));
+        EXPECT_EQ(c.identical, c.samples);
+        const double pairs = counter(c.cluster, "leaf_photon_pairs");
+        EXPECT_EQ(pairs, double(map.photons.size() * hierarchy.leaves.size()));  // every photon, every leaf
+        EXPECT_GT(counter(c.cluster, "splat_batches"), pairs / double(kCap));
+        EXPECT_LE(peak_pair_bytes(c.cluster), pair_bytes_bound(kCap, hierarchy));
+        EXPECT_LT(peak_pair_bytes(c.cluster), 0.02 * pairs * 8.0);  // what holding them all would take
+        if (seed == 1) {
+            report("radius 1e3, cap 1000 pairs", c);
+            std::printf("%.0f pairs in %.0f batches, peak %.0f bytes\n", pairs, counter(c.cluster, "splat_batches"),
+                        peak_pair_bytes(c.cluster));
+        }
+    }
+}
+
+TEST(SplatCluster, OnePhotonAloneBeyondThePairCap) {
+    std::mt19937 rng(83);
+    const ViewSamples vs = random_view_samples(SceneOptions{}, rng);
+    const PhotonMap map = random_photons(vs, 40, 0.5f, rng);
+    const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(48, 40));
+    ASSERT_GT(hierarchy.leaves.size(), 10u);
+    for (uint64_t cap : {uint64_t(1), uint64_t(10)}) {
+        SplatParams params = splat_params(1e3f, map);
+        params.max_pairs_in_memory = cap;
+        const Comparison c = compare_with_brute(vs, map, params, key_params(48, 40));
+        EXPECT_EQ(c.identical, c.samples);
+        EXPECT_EQ(counter(c.cluster, "splat_batches"), double(map.photons.size()));  // one photon a batch
+        EXPECT_LE(peak_pair_bytes(c.cluster), pair_bytes_bound(4 * hierarchy.leaves.size(), hierarchy));
+    }
+}
+
+// Many batches with several ranges in flight: the same output with one thread, two threads, and the oracle.
+TEST(SplatCluster, SmallPairCapSameOutputWithOneAndTwoThreads) {
+    std::mt19937 rng(89);
+    SceneOptions options;
+    options.width = 96;
+    options.height = 80;
+    const ViewSamples vs = random_view_samples(options, rng);
+    const PhotonMap map = random_photons(vs, 4000, 0.5f, rng);
+    const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(96, 80));
+    SplatParams params = splat_params(0.6f, map);
+    params.max_pairs_in_memory = 8 * hierarchy.leaves.size();  // up to 4 ranges in flight
+    auto run = [&](int threads, Stats& stats) {
+        std::vector<glm::vec3> out;
+        RenderControl control;
+        tbb::task_arena(threads).execute([&] { out = splat_cluster(hierarchy, vs, map, params, control, stats); });
+        return out;
+    };
+    Stats one, two, brute;
+    const std::vector<glm::vec3> expected = splat_brute(vs, map, params, RenderControl(), brute);
+    EXPECT_TRUE(run(1, one) == expected);
+    EXPECT_TRUE(run(2, two) == expected);
+    for (const Stats* stats : {&one, &two}) {
+        EXPECT_GE(counter(*stats, "splat_batches"), 4.0);
+        EXPECT_LE(peak_pair_bytes(*stats), pair_bytes_bound(params.max_pairs_in_memory, hierarchy));
+        EXPECT_EQ(counter(*stats, "contributing_pairs"), counter(brute, "contributing_pairs"));
+        EXPECT_EQ(counter(*stats, "leaf_photon_pairs"), counter(one, "leaf_photon_pairs"));
+        EXPECT_EQ(counter(*stats, "photon_node_tests"), counter(one, "photon_node_tests"));
+    }
+    std::printf("cap %llu pairs: %.0f pairs in %.0f batches, peak %.0f bytes\n",
+                (unsigned long long)params.max_pairs_in_memory, counter(two, "leaf_photon_pairs"),
+                counter(two, "splat_batches"), peak_pair_bytes(two));
+}
+
+TEST(SplatCluster, OneBatchWithTheDefaultPairCap) {
+    std::mt19937 rng(97);
+    const ViewSamples vs = random_view_samples(SceneOptions{}, rng);
+    const PhotonMap map = random_photons(vs, 3000, 0.5f, rng);
+    const SplatParams params = splat_params(0.3f, map);
+    EXPECT_EQ(params.max_pairs_in_memory, kDefaultMaxPairsInMemory);
+    const Comparison c = compare_with_brute(vs, map, params, key_params(48, 40));
+    EXPECT_EQ(c.identical, c.samples);
+    EXPECT_EQ(counter(c.cluster, "splat_batches"), 1.0);
+    EXPECT_EQ(c.cluster.bytes.count("splat_sample_sums") ? c.cluster.bytes.at("splat_sample_sums") : 0.0, 0.0);
+}
+
+// A cancel reaches the pipeline's stages and the batches shaded on the way.
+TEST(SplatCluster, StopsPromptlyWhenCancelledBetweenBatches) {
+    std::mt19937 rng(101);
+    const ViewSamples vs = random_view_samples(SceneOptions{}, rng);
+    const PhotonMap map = random_photons(vs, 100000, 0.5f, rng);
+    const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(48, 40));
+    SplatParams params = splat_params(1e3f, map);
+    params.max_pairs_in_memory = 4000;
+    RenderControl control;
+    Stats stats;
+    std::atomic<bool> started{false};
+    std::thread canceller([&] {
+        while (!started) std::this_thread::yield();
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        control.request_cancel();
+    });
+    const auto start = std::chrono::steady_clock::now();
+    started = true;
+    EXPECT_THROW(splat_cluster(hierarchy, vs, map, params, control, stats), Cancelled);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    canceller.join();
+    EXPECT_LT(seconds, 0.5);
+}
+
 TEST(Splat, CancelledBeforeStartThrows) {
     std::mt19937 rng(67);
     const ViewSamples vs = random_view_samples(SceneOptions{}, rng);
@@ -433,6 +558,10 @@ TEST(Splat, RefusesBadInput) {
     no_emitted.emitted = 0;
     EXPECT_THROW(splat_brute(vs, map, no_emitted, control, stats), InvalidInput);
     EXPECT_THROW(splat_cluster(hierarchy, vs, map, no_emitted, control, stats), InvalidInput);
+    SplatParams no_pairs = splat_params(0.3f, map);
+    no_pairs.max_pairs_in_memory = 0;
+    EXPECT_THROW(splat_brute(vs, map, no_pairs, control, stats), InvalidInput);
+    EXPECT_THROW(splat_cluster(hierarchy, vs, map, no_pairs, control, stats), InvalidInput);
     ViewSamples fewer = vs;
     fewer.samples.pop_back();
     EXPECT_THROW(splat_cluster(hierarchy, fewer, map, splat_params(0.3f, map), control, stats), InvalidInput);

@@ -3,6 +3,7 @@
 // (ascending photon index per sample), so an exact method equals `brute` up to float summation order.
 #pragma once
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,12 +26,27 @@ enum class SplatMethod {
 const char* to_string(SplatMethod method);
 SplatMethod splat_method_from_string(const std::string& name);  // throws InvalidInput
 
+// Default of SplatParams::max_pairs_in_memory: 32 Mi (leaf, photon) pairs, about 300 MB of pair buffers and
+// per-leaf lists at the peak. A 1080p frame with 200k photons at a typical radius fits in one batch.
+constexpr uint64_t kDefaultMaxPairsInMemory = uint64_t(1) << 25;
+
 struct SplatParams {
     float radius = 0.0f;                 // kernel radius r > 0, world units
     float cos_normal_tolerance = 0.5f;   // cos τ: reject when n_x·n_p <= cos τ
     float plane_distance_factor = 0.0f;  // κ: reject when |n_x·(x−p)| >= κ·r; 0 disables the test
     uint64_t emitted = 0;                // N_emitted of the photon map
+    // Cluster method only: how many (leaf, photon) pairs may be held at once, each about 9 bytes at the peak
+    // (4 in the traversal buffers, 4 in the per-leaf lists, plus the buffers' growth slack). The pairs grow as
+    // photons × leaves touched, which a radius as large as the scene makes photons × all leaves: photons are then
+    // splatted in consecutive batches that stay under this cap, with the same result. (Ranges of photons being
+    // traversed can each go past their share by the pairs of one photon; that is kept under half the cap, unless
+    // one photon alone has more.) Must be >= 1; small values are for tests (they make many batches).
+    uint64_t max_pairs_in_memory = kDefaultMaxPairsInMemory;
 };
+
+// Checks what every method relies on: a positive finite radius, N_emitted > 0 when photons are stored, a
+// pair cap >= 1. Throws InvalidInput naming the field.
+void validate(const SplatParams& params, const PhotonMap& photons);
 
 // Photon positions relative to the view samples' origin: all methods splat in these coordinates.
 std::vector<glm::vec3> relative_photon_positions(const PhotonMap& photons, const glm::vec3& origin);
@@ -68,6 +84,10 @@ inline glm::vec3 finish_sample(const ViewSample& s, const glm::dvec3& reflected_
 // "photon_node_tests", "photon_sample_tests", "contributing_pairs"; bytes of per-method structures too.
 std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& photons, const SplatParams& params,
                                    const RenderControl& control, Stats& stats);
+// The cluster method also reports counters "leaf_photon_pairs" and "splat_batches" (photons are splatted in
+// consecutive batches under SplatParams::max_pairs_in_memory), bytes "leaf_photon_lists" (the peak held by the
+// pair buffers and per-leaf lists together) and "splat_sample_sums" (the per-sample sums kept between batches,
+// 0 when there is one).
 std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
                                      const PhotonMap& photons, const SplatParams& params,
                                      const RenderControl& control, Stats& stats);

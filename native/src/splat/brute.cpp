@@ -20,19 +20,11 @@ namespace {
 // prompt even then, and costs one relaxed atomic load per block.
 constexpr size_t kPhotonsPerCancelCheck = 1 << 16;
 
-void check_inputs(const SplatParams& params, const PhotonMap& photons) {
-    if (!(params.radius > 0.0f) || !std::isfinite(params.radius))
-        throw InvalidInput("radius", std::to_string(params.radius) + " is not a positive finite number");
-    if (!photons.photons.empty() && params.emitted == 0)
-        throw InvalidInput("emitted", "0 emitted photons, but " + std::to_string(photons.photons.size()) +
-                                          " stored: the estimate would divide by zero");
-}
-
 }  // namespace
 
 std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& photons, const SplatParams& params,
                                    const RenderControl& control, Stats& stats) {
-    check_inputs(params, photons);
+    validate(params, photons);
     control.check();
     const std::vector<ViewSample>& views = samples.samples;
     std::vector<glm::vec3> radiance(views.size(), glm::vec3(0.0f));

@@ -1,4 +1,5 @@
-// What every splatting method shares: method names, and the coordinates photons are splatted in.
+// What every splatting method shares: method names, input validation, and the coordinates photons are splatted in.
+#include <cmath>
 #include <string>
 
 #include "photonsplat/errors.h"
@@ -32,6 +33,16 @@ SplatMethod splat_method_from_string(const std::string& name) {
         known += known.empty() ? m.name : std::string(", ") + m.name;
     }
     throw InvalidInput("splat method", "'" + name + "' is not one of: " + known);
+}
+
+void validate(const SplatParams& params, const PhotonMap& photons) {
+    if (!(params.radius > 0.0f) || !std::isfinite(params.radius))
+        throw InvalidInput("radius", std::to_string(params.radius) + " is not a positive finite number");
+    if (!photons.photons.empty() && params.emitted == 0)
+        throw InvalidInput("emitted", "0 emitted photons, but " + std::to_string(photons.photons.size()) +
+                                          " stored: the estimate would divide by zero");
+    if (params.max_pairs_in_memory == 0)
+        throw InvalidInput("max_pairs_in_memory", "0 leaves no room for a single (leaf, photon) pair; use >= 1");
 }
 
 // A float subtraction is already the exactly rounded difference, so doing it in double would not help.
