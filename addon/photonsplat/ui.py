@@ -125,6 +125,17 @@ class DATA_PT_photonsplat_light(PhotonSplatPanel, Panel):
             col.label(text="Rendered as a rectangle of the same area", icon='INFO')
 
 
+def _draw_surface_nodes(layout, id_block, fallback_property):
+    """The Surface input of a material's or world's Cycles output node, as Cycles' own panels show it."""
+    layout.prop(id_block, "use_nodes", icon='NODETREE')
+    if id_block.use_nodes and id_block.node_tree is not None:
+        output = id_block.node_tree.get_output_node('CYCLES')
+        if output is not None:
+            layout.template_node_view(id_block.node_tree, output, output.inputs["Surface"])
+    else:
+        layout.prop(id_block, fallback_property, text="Color")
+
+
 class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
     bl_label = "Surface"
     bl_context = "material"
@@ -136,13 +147,7 @@ class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
     def draw(self, context):
         material = context.material
         layout = self.layout
-        layout.prop(material, "use_nodes", icon='NODETREE')
-        if material.use_nodes and material.node_tree is not None:
-            output = material.node_tree.get_output_node('CYCLES')
-            if output is not None:
-                layout.template_node_view(material.node_tree, output, output.inputs["Surface"])
-        else:
-            layout.prop(material, "diffuse_color", text="Color")
+        _draw_surface_nodes(layout, material, fallback_property="diffuse_color")
         # Say how Photon Splat interprets this material, with what it had to approximate.
         spec = materials.convert_material(material)
         layout.separator()
@@ -159,15 +164,7 @@ class WORLD_PT_photonsplat_surface(PhotonSplatPanel, Panel):
         return context.world is not None and super().poll(context)
 
     def draw(self, context):
-        world = context.world
-        layout = self.layout
-        layout.prop(world, "use_nodes", icon='NODETREE')
-        if world.use_nodes and world.node_tree is not None:
-            output = world.node_tree.get_output_node('CYCLES')
-            if output is not None:
-                layout.template_node_view(world.node_tree, output, output.inputs["Surface"])
-        else:
-            layout.prop(world, "color")
+        _draw_surface_nodes(self.layout, context.world, fallback_property="color")
 
 
 # --- Blender's own panels ------------------------------------------------------------------------------------

@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
@@ -21,25 +22,22 @@ glm::vec3 Light::area_normal() const { return glm::normalize(glm::cross(axis_u, 
 
 float Light::area() const { return glm::length(glm::cross(axis_u, axis_v)); }
 
-static bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
 void validate(const Light& light, const std::string& where) {
-    if (!finite3(light.value) || light.value.x < 0 || light.value.y < 0 || light.value.z < 0)
-        throw InvalidInput(where + ".value", "each channel must be finite and >= 0");
-    if (!finite3(light.position)) throw InvalidInput(where + ".position", "must be finite");
+    require_nonnegative_rgb(light.value, where + ".value");
+    if (!is_finite(light.position)) throw InvalidInput(where + ".position", "must be finite");
     switch (light.kind) {
         case LightKind::point:
             if (!(std::isfinite(light.radius) && light.radius >= 0.0f))
                 throw InvalidInput(where + ".radius", "must be finite and >= 0, got " + std::to_string(light.radius));
             break;
         case LightKind::sun:
-            if (!finite3(light.direction) || glm::length(light.direction) < 1e-12f)
+            if (!is_finite(light.direction) || glm::length(light.direction) < 1e-12f)
                 throw InvalidInput(where + ".direction", "must be finite and non-zero");
             if (!(std::isfinite(light.angle) && light.angle >= 0.0f && light.angle < 3.14159f))
                 throw InvalidInput(where + ".angle", "must be in [0, π), got " + std::to_string(light.angle));
             break;
         case LightKind::area:
-            if (!finite3(light.axis_u) || !finite3(light.axis_v))
+            if (!is_finite(light.axis_u) || !is_finite(light.axis_v))
                 throw InvalidInput(where + ".axis_u/axis_v", "must be finite");
             if (!(light.area() > 0.0f) || !std::isfinite(light.area()))
                 throw InvalidInput(where + ".axis_u/axis_v", "span no area (zero size or parallel edges)");

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
@@ -22,14 +23,11 @@ MaterialKind material_kind_from_string(const std::string& name) {
     throw InvalidInput("material.kind", "must be 'diffuse', 'mirror' or 'glass', got '" + name + "'");
 }
 
-static bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
 void validate(const Material& m, const std::string& where) {
-    if (!finite3(m.color) || m.color.x < 0 || m.color.y < 0 || m.color.z < 0 || m.color.x > 1 || m.color.y > 1 ||
+    if (!is_finite(m.color) || m.color.x < 0 || m.color.y < 0 || m.color.z < 0 || m.color.x > 1 || m.color.y > 1 ||
         m.color.z > 1)
         throw InvalidInput(where + ".color", "each channel must be finite and in [0, 1]");
-    if (!finite3(m.emission) || m.emission.x < 0 || m.emission.y < 0 || m.emission.z < 0)
-        throw InvalidInput(where + ".emission", "each channel must be finite and >= 0");
+    require_nonnegative_rgb(m.emission, where + ".emission");
     if (m.kind == MaterialKind::glass && !(std::isfinite(m.ior) && m.ior > 0.0f))
         throw InvalidInput(where + ".ior", "must be finite and > 0, got " + std::to_string(m.ior));
 }

@@ -1,6 +1,9 @@
 #include "photonsplat/render.h"
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -23,6 +26,32 @@ constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyo
 template <typename T>
 void require(bool ok, const std::string& field, const std::string& what, T value) {
     if (!ok) throw InvalidInput(field, what + ", got " + std::to_string(value));
+}
+
+std::string gib(double bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+    return text;
+}
+
+// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
+// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
+// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
+void check_memory(const Camera& camera, uint64_t photons) {
+    const double pixels = static_cast<double>(camera.width()) * camera.height();
+    // view sample + per-pixel emission/alpha/flag + direct + indirect + RGBA and the three passes
+    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 12 + 12 + 16 + 36);
+    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
+    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
+    if (frame_bytes > 0.5 * memory)
+        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
+                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
+                                             gib(memory) + "; lower the resolution");
+    if (photon_bytes > 0.5 * memory)
+        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
+                                          " of photon records, more than half of this machine's " + gib(memory) +
+                                          "; lower the photon count");
 }
 
 }  // namespace
@@ -50,6 +79,7 @@ float default_radius(const Scene& scene, uint64_t photons) {
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
     validate(settings);
+    check_memory(camera, settings.photons);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;

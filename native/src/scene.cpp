@@ -10,12 +10,11 @@
 
 #include "photonsplat/errors.h"
 #include "photonsplat/ray_tracer.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
 namespace {
-
-bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 std::mutex& ray_tracer_mutex() {
     static std::mutex m;
@@ -39,8 +38,7 @@ void Scene::add_light(const Light& light) {
 }
 
 void Scene::set_background(const glm::vec3& radiance) {
-    if (!finite3(radiance) || radiance.x < 0 || radiance.y < 0 || radiance.z < 0)
-        throw InvalidInput("background", "each channel must be finite and >= 0");
+    require_nonnegative_rgb(radiance, "background");
     background_ = radiance;
 }
 
@@ -110,7 +108,7 @@ void Scene::add_mesh(const MeshInput& mesh) {
         glm::vec3 ng = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
         const float len = glm::length(ng);
         // Zero-area (or, after a huge transform, overflowing) triangles can neither be hit nor shaded.
-        if (!(len > 0.0f) || !std::isfinite(len) || !finite3(tri.v0) || !finite3(tri.v1) || !finite3(tri.v2)) {
+        if (!(len > 0.0f) || !std::isfinite(len) || !is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2)) {
             ++dropped_triangles_;
             continue;
         }

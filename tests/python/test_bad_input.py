@@ -1,4 +1,6 @@
 """Every bad input raises a clear ValueError naming the field; nothing crashes, nothing is silently wrong."""
+import os
+
 import numpy as np
 import pytest
 
@@ -155,3 +157,18 @@ def test_extreme_but_valid_settings_give_finite_images():
                      ps.RenderSettings(radius=1e3, photons=2000), ps.RenderSettings(max_bounces=0)):
         image, _ = ps.render(scene, camera, settings)
         assert np.isfinite(image).all(), settings
+
+
+def test_resolution_beyond_memory_is_refused_before_allocating():
+    camera = ps.look_at_camera(eye=(0, -3.9, 1), target=(0, 0, 1), width=65536, height=65536)
+    with pytest.raises(ValueError, match="resolution"):
+        ps.render(cornell_box(), camera, ps.RenderSettings(photons=1000))
+
+
+def test_photon_count_beyond_memory_is_refused_before_allocating():
+    memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    photons = int(memory / 56)  # a photon record is 56 bytes: this much would fill all of memory
+    if photons > 500_000_000:
+        pytest.skip("this machine has more memory than the largest photon count the settings allow")
+    with pytest.raises(ValueError, match="photons"):
+        ps.render(cornell_box(), cornell_camera(4, 4), ps.RenderSettings(photons=photons))

@@ -47,6 +47,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 namespace {
@@ -69,8 +70,6 @@ float distance_sq_to_box(const glm::vec3& p, const ClusterNode& node) {
     const glm::vec3 gap = glm::max(glm::max(node.box_min - p, p - node.box_max), glm::vec3(0.0f));
     return glm::dot(gap, gap);
 }
-
-bool is_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // How the cap is shared out (see the top of the file).
 struct PairBudget {

@@ -1,0 +1,20 @@
+// Small checks shared by everything that validates input on entry (materials, lights, scene, settings).
+#pragma once
+#include <cmath>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "photonsplat/errors.h"
+
+namespace ps {
+
+inline bool is_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Colours, radiances, intensities: every channel finite and >= 0.
+inline void require_nonnegative_rgb(const glm::vec3& v, const std::string& field) {
+    if (!is_finite(v) || v.x < 0.0f || v.y < 0.0f || v.z < 0.0f)
+        throw InvalidInput(field, "each channel must be finite and >= 0");
+}
+
+}  // namespace ps
