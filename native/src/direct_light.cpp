@@ -28,6 +28,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
     const float inv_pi = 1.0f / 3.14159265358979323846f;
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> shadow_rays{0};
+    std::atomic<uint64_t> samples_done{0};
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.samples.size(), 4096), [&](const tbb::blocked_range<size_t>& range) {
         if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
@@ -61,6 +62,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             out[i] = s.throughput * s.albedo * inv_pi * sum;
         }
         shadow_rays += rays;
+        control.advance(samples_done += range.size(), samples.samples.size());
     });
     control.check();
     stats.counters["shadow_rays"] += static_cast<double>(shadow_rays.load());

@@ -104,6 +104,7 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     const uint64_t chunks = (settings.count + kChunk - 1) / kChunk;
     std::vector<std::vector<Photon>> per_chunk(chunks);
     std::atomic<bool> cancelled{false};
+    std::atomic<uint64_t> chunks_done{0};
     tbb::parallel_for(uint64_t{0}, chunks, [&](uint64_t chunk) {
         if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
             cancelled = true;
@@ -118,6 +119,7 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
             trace_one_photon(scene, sources, which, choice.probability[which], settings.max_bounces, rng,
                              per_chunk[chunk]);
         }
+        control.advance(++chunks_done, chunks);
     });
     control.check();
 

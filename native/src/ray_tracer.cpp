@@ -25,6 +25,15 @@ RTCDevice shared_device() {
     return device;
 }
 
+// Embree keeps an error code per device and thread: read it right after the calls that can fail.
+void throw_on_embree_error(RTCDevice device, const char* what) {
+    const RTCError error = rtcGetDeviceError(device);
+    if (error == RTC_ERROR_NONE) return;
+    const char* reason = error == RTC_ERROR_OUT_OF_MEMORY ? "out of memory" : "internal error";
+    throw std::runtime_error(std::string("Embree: ") + what + " failed (" + reason + ", code " +
+                             std::to_string(static_cast<int>(error)) + ")");
+}
+
 }  // namespace
 
 struct RayTracer::Impl {
@@ -33,7 +42,13 @@ struct RayTracer::Impl {
 
 RayTracer::RayTracer(const std::vector<Triangle>& triangles) : impl_(new Impl) {
     RTCDevice device = shared_device();
+    rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
     impl_->scene = rtcNewScene(device);
+    if (!impl_->scene) {
+        delete impl_;
+        throw_on_embree_error(device, "creating a scene");
+        throw std::runtime_error("Embree: creating a scene failed");
+    }
     rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
     if (!triangles.empty()) {
         RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -63,6 +78,13 @@ RayTracer::RayTracer(const std::vector<Triangle>& triangles) : impl_(new Impl) {
         bytes_ = triangles.size() * (9 * sizeof(float) + 3 * sizeof(unsigned));
     }
     rtcCommitScene(impl_->scene);
+    try {
+        throw_on_embree_error(device, "building the BVH");
+    } catch (...) {
+        rtcReleaseScene(impl_->scene);
+        delete impl_;
+        throw;
+    }
 }
 
 RayTracer::~RayTracer() {

@@ -96,26 +96,26 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
     tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
     arena.execute([&] {
         StageTimer total(stats, "total");
-        control.set_stage("scene", 0.0);
+        control.begin_stage("scene", 0.0, 0.02);
         {
             StageTimer t(stats, "scene_build");
             stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
         }
         control.check();
 
-        control.set_stage("view samples", 0.02);
+        control.begin_stage("view samples", 0.02, 0.15);
         ViewSampleSettings view_settings;
         view_settings.seed = settings.seed;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
 
-        control.set_stage("direct light", 0.15);
+        control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
         direct_settings.seed = settings.seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
 
-        control.set_stage("photons", 0.35);
+        control.begin_stage("photons", 0.35, 0.45);
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
@@ -129,11 +129,11 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         params.emitted = std::max<uint64_t>(photons.emitted, 1);
         std::vector<glm::vec3> indirect;
         if (settings.method == SplatMethod::brute) {
-            control.set_stage("splat (brute)", 0.55);
+            control.begin_stage("splat (brute)", 0.45, 0.98);
             StageTimer t(stats, "splat");
             indirect = splat_brute(samples, photons, params, control, stats);
         } else {
-            control.set_stage("cluster hierarchy", 0.5);
+            control.begin_stage("cluster hierarchy", 0.45, 0.5);
             ClusterHierarchy hierarchy;
             {
                 StageTimer t(stats, "hierarchy_build");
@@ -143,13 +143,13 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
             stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
             stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
             control.check();
-            control.set_stage("splat (cluster)", 0.6);
+            control.begin_stage("splat (cluster)", 0.5, 0.98);
             StageTimer t(stats, "splat");
             indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
         }
         control.check();
 
-        control.set_stage("image", 0.98);
+        control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");
         result.width = width;
         result.height = height;
@@ -173,7 +173,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         }
         stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
     });
-    control.set_stage("done", 1.0);
+    control.begin_stage("done", 1.0, 1.0);
     return result;
 }
 

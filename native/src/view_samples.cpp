@@ -79,6 +79,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, cons
     std::vector<uint8_t> has_sample(pixels, 0);
     scene.ray_tracer();  // build the BVH once, before the threads need it
     std::atomic<bool> cancelled{false};
+    std::atomic<uint64_t> rows_done{0};
     tbb::parallel_for(tbb::blocked_range<int>(0, height, 8), [&](const tbb::blocked_range<int>& rows) {
         if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
             cancelled = true;
@@ -98,6 +99,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, cons
                 }
             }
         }
+        control.advance(rows_done += rows.size(), static_cast<uint64_t>(height));
     });
     control.check();
 

@@ -115,3 +115,13 @@ def test_write_image(tmp_path):
         ps.write_image(str(tmp_path / "bad.png"), np.zeros((4, 4), np.float32))
     with pytest.raises(RuntimeError):
         ps.write_image(str(tmp_path / "no_such_dir" / "x.png"), image)
+
+
+def test_progress_moves_within_a_long_splat_and_never_goes_back():
+    reports = []
+    ps.render(cornell_box(), cornell_camera(96, 96), ps.RenderSettings(photons=100_000, method="brute"),
+              progress=lambda stage, fraction: reports.append((stage, fraction)))
+    fractions = [f for _, f in reports]
+    assert fractions == sorted(fractions), "progress went backwards"
+    inside_splat = {round(f, 3) for s, f in reports if s.startswith("splat") and 0.45 < f < 0.98}
+    assert len(inside_splat) >= 2, f"the bar must move during the splat, got {reports}"

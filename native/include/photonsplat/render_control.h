@@ -1,7 +1,9 @@
 // The thin channel between a running render and whoever started it: the render publishes its stage and
 // progress, the caller may ask it to stop. Everything is atomic or locked, so any thread may read or write.
 #pragma once
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <mutex>
 #include <string>
 
@@ -20,23 +22,32 @@ public:
         if (cancel_requested()) throw Cancelled();
     }
 
-    // stage: a short name ("view samples", "photons", ...); fraction: overall progress in [0, 1].
-    void set_stage(const std::string& stage, double fraction) {
+    // Called by the render as each stage starts: its short name ("view samples", "photons", ...) and the
+    // part [start, end] of the whole render it covers.
+    void begin_stage(const std::string& stage, double start, double end) {
         std::lock_guard<std::mutex> lock(mutex_);
         stage_ = stage;
-        fraction_ = fraction;
+        start_ = start;
+        end_ = end;
+        within_.store(0.0, std::memory_order_relaxed);
     }
+    // Called from inside a stage (any thread) as work completes: `done` of `total` units.
+    void advance(uint64_t done, uint64_t total) const {
+        if (total > 0) within_.store(static_cast<double>(done) / static_cast<double>(total), std::memory_order_relaxed);
+    }
+    // The current stage and the overall fraction in [0, 1].
     void progress(std::string& stage, double& fraction) const {
         std::lock_guard<std::mutex> lock(mutex_);
         stage = stage_;
-        fraction = fraction_;
+        fraction = start_ + (end_ - start_) * std::min(1.0, within_.load(std::memory_order_relaxed));
     }
 
 private:
     std::atomic<bool> cancel_{false};
     mutable std::mutex mutex_;
     std::string stage_ = "starting";
-    double fraction_ = 0.0;
+    double start_ = 0.0, end_ = 0.0;
+    mutable std::atomic<double> within_{0.0};
 };
 
 }  // namespace ps

@@ -34,7 +34,7 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
 
     const std::vector<glm::vec3> positions = relative_photon_positions(photons, samples.origin);
     const size_t photon_count = positions.size();
-    std::atomic<uint64_t> tests{0}, contributing{0};
+    std::atomic<uint64_t> tests{0}, contributing{0}, samples_done{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, views.size(), 16), [&](const tbb::blocked_range<size_t>& range) {
         uint64_t local_contributing = 0;
         for (size_t i = range.begin(); i != range.end(); ++i) {
@@ -53,6 +53,7 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
         }
         tests += uint64_t(range.size()) * photon_count;
         contributing += local_contributing;
+        control.advance(samples_done += range.size(), views.size());
     });
     tests_counter += double(tests.load());
     contributing_counter += double(contributing.load());

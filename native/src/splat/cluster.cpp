@@ -257,6 +257,8 @@ private:
         }
         // Follows a rise at once and a fall slowly: ranges sized for too few pairs stop early, and their rest
         // is traversed serially here.
+        // Progress: photons traversed, then (in the last batch) leaves shaded.
+        control_.advance(range_end, positions_.size() + hierarchy_.leaves.size());
         const double sample = double(pairs) / double(range_end - range_begin);
         const double previous = pairs_per_photon_.load(std::memory_order_relaxed);
         pairs_per_photon_.store(previous < 0.0 ? sample : std::max(sample, 0.75 * previous + 0.25 * sample),
@@ -326,6 +328,11 @@ private:
             const size_t list_size = offsets_[leaf + 1] - offsets_[leaf];
             if (list_size == 0 && !last) continue;
             control_.check();
+            if (last) {
+                const uint64_t shaded = leaves_shaded_.fetch_add(1, std::memory_order_relaxed) + 1;
+                if ((shaded & 255) == 0)
+                    control_.advance(positions_.size() + shaded, positions_.size() + hierarchy_.leaves.size());
+            }
             const ClusterNode& node = hierarchy_.nodes[leaf];
             for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                 const uint32_t i = hierarchy_.sample_order[k];
@@ -360,6 +367,7 @@ private:
 
     size_t next_photon_ = 0;                      // input stage
     std::atomic<double> pairs_per_photon_{-1.0};  // output stage → input stage; < 0 until known
+    std::atomic<uint64_t> leaves_shaded_{0};       // in the last batch, for progress
     std::mutex segments_mutex_;                   // input and output stages
     std::vector<std::unique_ptr<Segment>> segments_;
     std::vector<Segment*> free_segments_;
