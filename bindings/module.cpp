@@ -139,7 +139,7 @@ void add_mesh(ps::Scene& scene, const std::string& name, const py::object& verti
 
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
-                                 float plane_distance) {
+                                 float plane_distance, const std::string& kernel, int directional_level) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -150,6 +150,8 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.direct_samples = direct_samples;
     s.normal_tolerance = normal_tolerance;
     s.plane_distance = plane_distance;
+    s.kernel = ps::kernel_from_string(kernel);
+    s.directional_level = directional_level;
     ps::validate(s);
     return s;
 }
@@ -231,7 +233,8 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
 PYBIND11_MODULE(_core, m) {
     m.doc() = "Photon Splat native core: scene, camera, render settings and render().";
     m.attr("__version__") = "0.1.0";
-    m.attr("METHODS") = py::make_tuple("brute", "cluster");
+    m.attr("METHODS") = py::tuple(py::cast(ps::splat_method_names()));
+    m.attr("KERNELS") = py::make_tuple("uniform", "epanechnikov");
 
     static py::exception<ps::Cancelled> cancelled(m, "Cancelled", PyExc_RuntimeError);
     py::register_exception_translator([](std::exception_ptr p) {
@@ -249,18 +252,20 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
-               const py::object& emission) {
+               const py::object& emission, float roughness) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
                 mat.color = vec3(color, "material '" + name + "'.color");
                 mat.ior = ior;
                 mat.emission = vec3(emission, "material '" + name + "'.emission");
+                mat.roughness = roughness;  // validated by the core: finite, in [0, 1]
                 return s.add_material(mat);
             },
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
-            "emission"_a = py::make_tuple(0.0, 0.0, 0.0),
-            "Adds a material ('diffuse', 'mirror' or 'glass'); returns its index for material_ids.")
+            "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f,
+            "Adds a material ('diffuse', 'mirror', 'glass' or 'glossy'); returns its index for material_ids. "
+            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror.")
         .def("add_mesh", &add_mesh, "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(),
              "material_ids"_a = py::none(), "transform"_a = py::none(),
              "Adds a triangle mesh: vertices (N,3), triangles (M,3), optional normals (N,3) or (M,3,3), "
@@ -328,9 +333,9 @@ PYBIND11_MODULE(_core, m) {
         .def_property_readonly("orthographic", &ps::Camera::orthographic);
 
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
-        .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster",
+        .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -342,11 +347,16 @@ PYBIND11_MODULE(_core, m) {
         .def_readwrite("direct_samples", &ps::RenderSettings::direct_samples)
         .def_readwrite("normal_tolerance", &ps::RenderSettings::normal_tolerance)
         .def_readwrite("plane_distance", &ps::RenderSettings::plane_distance)
+        .def_property(
+            "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
+            [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
+        .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
-              << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ")";
+              << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
+              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level << ")";
             return o.str();
         });
 

@@ -1,17 +1,21 @@
-"""Benchmark: stage timings and counters of the splatting methods on a .blend scene, as markdown.
+"""Benchmark: splatting methods on a .blend scene, measured like the paper (HPG 2016), written as markdown.
 
-Runs inside Blender so it measures exactly what the engine renders (the add-on's own export):
+Runs inside Blender so it measures exactly what the engine renders (the add-on's own export). Every render of
+one frame and photon count uses the same seed, so all methods splat the same photons onto the same samples.
 
-    BLENDER_USER_SCRIPTS=build/blender blender -b --factory-startup -noaudio --addons photonsplat \
-        blend_scenes/cornell_caustics.blend --python tools/benchmark.py -- \
-        --config 1920x1080:200000:cluster --config 480x270:200000:brute,cluster --repeats 3 --out docs/bench.md
+    BLENDER_USER_SCRIPTS=build/blender blender -b --factory-startup -noaudio --addons photonsplat \\
+        blend_scenes/atrium.blend --python tools/benchmark.py -- \\
+        --resolution 1920x1080 --frames 1-8 --photons 10000,50000,200000,1000000 \\
+        --methods tiled,cluster,cluster_cone,directional,gather --repeats 1 \\
+        --json docs/results/bench_atrium.json --markdown docs/results/bench_atrium.md
 
-Each --config is WIDTHxHEIGHT:PHOTONS:METHOD[,METHOD...]. Times are medians over --repeats runs
-(--brute-repeats for brute); counters
-and bytes come from the last run (they do not change between runs with the same seed). This is a benchmark,
-not a test: the machines are shared and noisy, so compare ratios measured in the same run.
+Times are medians over --repeats runs (--brute-repeats for brute, the slow oracle); counters and bytes come from
+the last run (they do not change between runs with the same seed). Radii are the engine's automatic ones: the
+scene's size scaled by 1/sqrt(photons). This is a benchmark, not a test: the machines are shared and noisy, so
+compare ratios measured in the same run.
 """
 import argparse
+import json
 import os
 import platform
 import statistics
@@ -19,96 +23,256 @@ import sys
 import time
 
 import bpy
+import numpy as np
 
-import photonsplat
 from photonsplat import _core as core
 from photonsplat import export
 
-STAGES = ["view_samples", "direct_light", "photon_trace", "hierarchy_build", "splat", "splat_traverse",
-          "splat_lists", "splat_shade", "image", "total"]
-COUNTERS = ["view_samples", "photons_emitted", "photons_stored", "caustic_photons_stored", "hierarchy_nodes",
-            "hierarchy_leaves", "photon_node_tests", "photon_sample_tests", "contributing_pairs", "shadow_rays"]
-STRUCTURES = ["view_samples", "hierarchy", "leaf_photon_lists", "photon_map", "embree_scene", "image"]
+STAGES = ["view_samples", "direct_light", "photon_trace", "hierarchy_build", "splat", "total"]
 
 
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--config", action="append", required=True, help="WxH:PHOTONS:METHOD[,METHOD]")
+    parser.add_argument("--resolution", action="append", default=None, help="WxH (repeatable)")
+    parser.add_argument("--frames", default="", help="e.g. 1-8 or 1,3,5 (default: the current frame)")
+    parser.add_argument("--photons", default="200000", help="comma-separated photon counts")
+    parser.add_argument("--methods", default="cluster", help="comma-separated methods")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--brute-repeats", type=int, default=1, help="brute is the slow oracle: fewer runs")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--out", help="markdown file to write (default: print only)")
-    return parser.parse_args(argv)
+    parser.add_argument("--json", help="write every record here")
+    parser.add_argument("--markdown", help="write the tables here")
+    args = parser.parse_args(argv)
+    args.resolution = args.resolution or ["1920x1080"]
+    return args
 
 
-def run(width, height, photons, method, repeats, seed):
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = width, height
-    scene.render.resolution_percentage = 100
-    scene.photonsplat.photons = photons
-    scene.photonsplat.method = method
-    scene.photonsplat.seed = seed
-    depsgraph = bpy.context.evaluated_depsgraph_get()
+def parse_frames(text):
+    if not text:
+        return [bpy.context.scene.frame_current]
+    frames = []
+    for part in text.split(","):
+        if "-" in part:
+            a, b = part.split("-")
+            frames += list(range(int(a), int(b) + 1))
+        else:
+            frames.append(int(part))
+    return frames
+
+
+def display_luminance(image):
+    """Luminance of the display image (linear -> clamp [0, 1] -> sRGB), as the design measures SSIM on."""
+    rgb = np.clip(image[..., :3], 0.0, 1.0)
+    srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1.0 / 2.4) - 0.055)
+    return srgb @ np.array([0.2126, 0.7152, 0.0722])
+
+
+def ssim(a, b):
+    """SSIM of Wang et al. 2004 (11x11 Gaussian window, sigma 1.5, K1 0.01, K2 0.03) on display luminance."""
+    from skimage.metrics import structural_similarity
+
+    return float(structural_similarity(display_luminance(a), display_luminance(b), gaussian_weights=True,
+                                       sigma=1.5, use_sample_covariance=False, data_range=1.0))
+
+
+def render_once(frame, settings):
     start = time.perf_counter()
-    frame = export.export_frame(core, depsgraph)
-    export_seconds = time.perf_counter() - start
-    runs = []
-    for _ in range(repeats):
-        _, stats = core.render(frame.scene, frame.camera, frame.settings)
-        runs.append(stats)
-    seconds = {k: statistics.median(r["seconds"].get(k, 0.0) for r in runs) for k in STAGES}
-    seconds["export (Python)"] = export_seconds
-    return {"seconds": seconds, "counters": runs[-1]["counters"], "bytes": runs[-1]["bytes"],
-            "radius": runs[-1]["values"]["radius"]}
+    image, stats = core.render(frame.scene, frame.camera, settings)
+    stats["seconds"]["wall (incl. bindings)"] = time.perf_counter() - start
+    return image, stats
 
 
-def fmt_count(x):
-    return f"{x:,.0f}"
+def measure(args):
+    scene = bpy.context.scene
+    records, reference_images = [], {}
+    for resolution in args.resolution:
+        width, height = (int(x) for x in resolution.lower().split("x"))
+        scene.render.resolution_x, scene.render.resolution_y = width, height
+        scene.render.resolution_percentage = 100
+        for frame_number in parse_frames(args.frames):
+            scene.frame_set(frame_number)
+            for photons in (int(p) for p in args.photons.split(",")):
+                scene.photonsplat.photons = photons
+                scene.photonsplat.seed = args.seed
+                scene.photonsplat.radius = 0.0
+                frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+                radius = None
+                for method in args.methods.split(","):
+                    settings = frame.settings
+                    settings.method = method
+                    repeats = args.brute_repeats if method == "brute" else args.repeats
+                    print(f"benchmark: {width}x{height} frame {frame_number} {photons} photons {method} "
+                          f"x{repeats}", flush=True)
+                    runs = [render_once(frame, settings) for _ in range(repeats)]
+                    image, last = runs[-1]
+                    record = {
+                        "resolution": [width, height], "frame": frame_number, "photons": photons,
+                        "method": method, "repeats": repeats, "radius": last["values"]["radius"],
+                        "seconds": {k: statistics.median(r["seconds"].get(k, 0.0) for _, r in runs)
+                                    for k in set().union(*(r["seconds"] for _, r in runs))},
+                        "counters": last["counters"], "bytes": last["bytes"],
+                    }
+                    key = (width, height, frame_number, photons)
+                    if method == "cluster_cone":
+                        reference_images[key] = image
+                    if method == "directional" and key in reference_images:
+                        record["ssim_vs_cluster_cone"] = ssim(image, reference_images[key])
+                    records.append(record)
+                    radius = record["radius"]
+                reference_images.pop((width, height, frame_number, photons), None)
+                print(f"benchmark: radius {radius:.4g}", flush=True)
+    return records
 
 
-def table(results):
-    """One column per (config, method); rows: stage times, counters, bytes."""
-    heads = [f"{w}×{h}, {p:,} photons, `{m}`" for (w, h, p, m) in results]
-    lines = ["| | " + " | ".join(heads) + " |", "|---" * (len(heads) + 1) + "|"]
-    values = list(results.values())
-    lines.append("| radius (world units) | " + " | ".join(f"{v['radius']:.4f}" for v in values) + " |")
-    for k in STAGES + ["export (Python)"]:
-        lines.append(f"| time: {k} (s) | " + " | ".join(f"{v['seconds'].get(k, 0.0):.3f}" for v in values) + " |")
-    for k in COUNTERS:
-        lines.append(f"| {k.replace('_', ' ')} | " + " | ".join(fmt_count(v['counters'].get(k, 0)) for v in values) + " |")
-    lines.append("| photon–sample tests ÷ contributing pairs | " + " | ".join(
-        f"{v['counters']['photon_sample_tests'] / max(v['counters']['contributing_pairs'], 1):.2f}" for v in values) + " |")
-    for k in STRUCTURES:
-        lines.append(f"| memory: {k} (MiB) | " + " | ".join(
-            (f"{v['bytes'][k] / 2**20:.1f}" if k in v["bytes"] else "–") for v in values) + " |")
+# ---- tables -------------------------------------------------------------------------------------------------
+
+def efficiency(counters):
+    return counters.get("photon_sample_tests", 0.0) / max(counters.get("contributing_pairs", 0.0), 1.0)
+
+
+def mean(values):
+    values = list(values)
+    return sum(values) / len(values) if values else float("nan")
+
+
+def summary_tables(records, methods):
+    """Per photon count: one row per method, averaged over the frames (the fly-through)."""
+    lines = []
+    for (width, height) in sorted({tuple(r["resolution"]) for r in records}):
+        for photons in sorted({r["photons"] for r in records}):
+            rows = [r for r in records if r["photons"] == photons and tuple(r["resolution"]) == (width, height)]
+            if not rows:
+                continue
+            frames = sorted({r["frame"] for r in rows})
+            radius = rows[0]["radius"]
+            lines.append(f"\n### {width}×{height}, {photons:,} photons, radius {radius:.4g}, "
+                         f"{len(frames)} frame{'s' if len(frames) > 1 else ''}\n")
+            lines.append("| method | splat (s) | frame (s) | photon–node tests | photon–sample tests | contributing "
+                         "pairs | tests ÷ contributing | node accepts | SSIM vs cluster_cone |")
+            lines.append("|---|---|---|---|---|---|---|---|---|")
+            for method in methods:
+                m = [r for r in rows if r["method"] == method]
+                if not m:
+                    continue
+                tests = sum(r["counters"].get("photon_sample_tests", 0) for r in m)
+                contributing = sum(r["counters"].get("contributing_pairs", 0) for r in m)
+                ssims = [r["ssim_vs_cluster_cone"] for r in m if "ssim_vs_cluster_cone" in r]
+                lines.append(
+                    f"| `{method}` | {mean(r['seconds']['splat'] for r in m):.3f} | "
+                    f"{mean(r['seconds']['total'] for r in m):.3f} | "
+                    f"{mean(r['counters'].get('photon_node_tests', 0) for r in m):,.0f} | "
+                    f"{mean(r['counters'].get('photon_sample_tests', 0) for r in m):,.0f} | "
+                    f"{mean(r['counters'].get('contributing_pairs', 0) for r in m):,.0f} | "
+                    f"{tests / max(contributing, 1):.2f} | "
+                    f"{mean(r['counters'].get('node_accepts', 0) for r in m):,.0f} | "
+                    f"{(f'{mean(ssims):.3f}' if ssims else '–')} |")
     return "\n".join(lines)
+
+
+def ratio_lines(records):
+    """The issue's acceptance figures, as ratios measured in this run."""
+    lines = []
+    for photons in sorted({r["photons"] for r in records}):
+        by = {}
+        for r in records:
+            if r["photons"] == photons:
+                by.setdefault(r["method"], {})[(tuple(r["resolution"]), r["frame"])] = r
+        pairs = lambda a, b: [(by[a][k], by[b][k]) for k in by.get(a, {}) if k in by.get(b, {})]
+        cone_tiled = pairs("cluster_cone", "tiled")
+        if cone_tiled:
+            ratio_of_means = sum(c["seconds"]["splat"] for c, _ in cone_tiled) / sum(t["seconds"]["splat"] for _, t in cone_tiled)
+            mean_ratio = mean(c["seconds"]["splat"] / t["seconds"]["splat"] for c, t in cone_tiled)
+            lines.append(f"- {photons:,} photons: `cluster_cone` splat ÷ `tiled` splat = {ratio_of_means:.2f} (total over "
+                         f"{len(cone_tiled)} frames; mean of per-frame ratios {mean_ratio:.2f})")
+        dir_cone = pairs("directional", "cluster_cone")
+        if dir_cone:
+            speedup = sum(c["seconds"]["splat"] for _, c in dir_cone) / sum(d["seconds"]["splat"] for d, _ in dir_cone)
+            ssims = [d.get("ssim_vs_cluster_cone") for d, _ in dir_cone if "ssim_vs_cluster_cone" in d]
+            lines.append(f"- {photons:,} photons: `directional` splat is {speedup:.2f}× faster than `cluster_cone`; "
+                         f"SSIM against `cluster_cone` {mean(ssims):.3f} (mean over frames, min {min(ssims):.3f})")
+        cone = [r for r in records if r["photons"] == photons and r["method"] == "cluster_cone"]
+        if cone:
+            tests = sum(r["counters"].get("photon_sample_tests", 0) for r in cone)
+            contributing = sum(r["counters"].get("contributing_pairs", 0) for r in cone)
+            lines.append(f"- {photons:,} photons: `cluster_cone` photon–sample tests ÷ contributing pairs = "
+                         f"{tests / max(contributing, 1):.2f}")
+    return "\n".join(lines)
+
+
+def frame_table(records, methods, photons):
+    rows = [r for r in records if r["photons"] == photons]
+    frames = sorted({r["frame"] for r in rows})
+    if len(frames) < 2:
+        return ""
+    lines = [f"\nSplat time per frame (s), {photons:,} photons:\n",
+             "| frame | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
+    for f in frames:
+        cells = []
+        for m in methods:
+            r = [x for x in rows if x["frame"] == f and x["method"] == m]
+            cells.append(f"{r[0]['seconds']['splat']:.3f}" if r else "–")
+        lines.append(f"| {f} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def memory_table(records, methods, photons):
+    rows = [r for r in records if r["photons"] == photons]
+    keys = sorted({k for r in rows for k in r["bytes"]})
+    lines = [f"\nMemory per structure (MiB, largest over the frames), {photons:,} photons:\n",
+             "| structure | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
+    for k in keys:
+        cells = []
+        for m in methods:
+            values = [r["bytes"][k] for r in rows if r["method"] == m and k in r["bytes"]]
+            cells.append(f"{max(values) / 2**20:.1f}" if values else "–")
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def stage_table(records, methods, photons):
+    rows = [r for r in records if r["photons"] == photons]
+    keys = sorted({k for r in rows for k in r["seconds"]})
+    lines = [f"\nStage times (s, mean over the frames), {photons:,} photons:\n",
+             "| stage | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
+    for k in keys:
+        cells = []
+        for m in methods:
+            values = [r["seconds"].get(k, 0.0) for r in rows if r["method"] == m]
+            cells.append(f"{mean(values):.3f}" if values else "–")
+        lines.append(f"| {k} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def markdown(records, args):
+    methods = [m for m in args.methods.split(",")]
+    photon_counts = sorted({r["photons"] for r in records})
+    focus = 200000 if 200000 in photon_counts else photon_counts[-1]
+    header = (f"Scene `{os.path.basename(bpy.data.filepath)}`; frames {args.frames or 'current'}; medians of "
+              f"{args.repeats} runs ({args.brute_repeats} for `brute`); seed {args.seed}; {os.cpu_count()} cores "
+              f"({platform.machine()}); Photon Splat {core.__version__}.\n")
+    parts = [header, "**Ratios (acceptance figures):**\n", ratio_lines(records), summary_tables(records, methods),
+             frame_table(records, methods, focus), stage_table(records, methods, focus),
+             memory_table(records, methods, focus)]
+    return "\n".join(p for p in parts if p) + "\n"
 
 
 def main():
     args = parse_args()
-    results = {}
-    for config in args.config:
-        size, photons, methods = config.split(":")
-        width, height = (int(x) for x in size.lower().split("x"))
-        for method in methods.split(","):
-            print(f"benchmark: {width}x{height} {photons} photons {method} ...", flush=True)
-            repeats = args.brute_repeats if method == "brute" else args.repeats
-            results[(width, height, int(photons), method)] = run(width, height, int(photons), method, repeats,
-                                                                 args.seed)
-    blend = os.path.basename(bpy.data.filepath)
-    header = (f"Scene `{blend}`; median of {args.repeats} runs ({args.brute_repeats} for `brute`); seed {args.seed}; {os.cpu_count()} cores "
-              f"({platform.processor() or platform.machine()}); Photon Splat {core.__version__}.")
-    text = header + "\n\n" + table(results) + "\n"
+    records = measure(args)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(records, f, indent=1)
+    text = markdown(records, args)
     print(text)
-    if args.out:
-        with open(args.out, "w") as f:
+    if args.markdown:
+        with open(args.markdown, "w") as f:
             f.write(text)
 
 
 try:
     main()
-except Exception as error:  # make Blender exit non-zero with --python-exit-code
+except Exception:  # make Blender exit non-zero with --python-exit-code
     import traceback
 
     traceback.print_exc()

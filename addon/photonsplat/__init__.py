@@ -21,6 +21,7 @@ bl_info = {
 # registers and says why in its panel, instead of failing to enable.
 try:
     from ._core import (  # noqa: F401  (re-exported scripting API)
+        KERNELS,
         METHODS,
         Camera,
         Cancelled,

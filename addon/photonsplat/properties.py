@@ -9,13 +9,25 @@ import bpy
 from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 
-# The splatting methods of the design (docs/design.md section 2). Only these two exist in the core so far;
-# the others ("tiled", "cluster_cone", "directional", "gather") are added here when the core offers them.
+# The splatting methods of the design (docs/design.md section 2), named as the core names them.
 METHOD_ITEMS = (
+    ("cluster_cone", "Cluster + Cones",
+     "The paper's cluster-trivial: the cluster hierarchy with normal-cone trivial reject and accept; exact"),
     ("cluster", "Cluster",
-     "Photons walk a hierarchy of view-sample clusters; exact and fast (the default)"),
+     "Photons walk a hierarchy of view-sample clusters, culled by bounding boxes; exact"),
+    ("directional", "Directional (approximate)",
+     "Flux gathered per cluster of one level in 8 direction bins: faster, approximate"),
+    ("tiled", "Tiled",
+     "Mara et al. 2013: photons binned into 32x32-pixel screen tiles with depth bounds; exact"),
+    ("gather", "Gather",
+     "Each pixel gathers photons from a hashed uniform grid; exact"),
     ("brute", "Brute Force",
      "Every photon against every view sample; exact but slow, meant as a reference for small images"),
+)
+
+KERNEL_ITEMS = (
+    ("uniform", "Uniform", "Constant weight inside the radius (keeps the cone method's trivial accept exact)"),
+    ("epanechnikov", "Epanechnikov", "Weight falling off as 1 - d^2/r^2: smoother photon footprints"),
 )
 
 
@@ -35,7 +47,7 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
     method: EnumProperty(
         name="Method",
         description="How photons are splatted onto the pixels they light",
-        items=METHOD_ITEMS, default="cluster",
+        items=METHOD_ITEMS, default="cluster_cone",
     )
     max_bounces: IntProperty(
         name="Max Bounces",
@@ -51,6 +63,17 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
         name="Direct Samples",
         description="Shadow rays per light and pixel for direct light (soft shadows of lights with a size)",
         default=4, min=1, soft_max=64,
+    )
+    kernel: EnumProperty(
+        name="Kernel",
+        description="Density-estimation kernel: how a photon's light is spread over its radius",
+        items=KERNEL_ITEMS, default="uniform",
+    )
+    directional_level: IntProperty(
+        name="Directional Level",
+        description="Directional method only: hierarchy level (from the leaves) where photons stop; "
+                    "-1 chooses it from the radius",
+        default=-1, min=-1, soft_max=16,
     )
     threads: IntProperty(
         name="Threads",

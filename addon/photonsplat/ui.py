@@ -70,6 +70,9 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         col.prop(settings, "photons")
         col.prop(settings, "radius")
         col.prop(settings, "method")
+        col.prop(settings, "kernel")
+        if settings.method == "directional":
+            col.prop(settings, "directional_level")
         col = layout.column()
         col.prop(settings, "max_bounces")
         col.prop(settings, "direct_samples")

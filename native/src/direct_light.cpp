@@ -1,17 +1,20 @@
 #include "photonsplat/direct_light.h"
 
 #include <atomic>
+#include <limits>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "photonsplat/brdf.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/view_samples.h"
 
@@ -40,12 +43,30 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             const ViewSample& s = samples.samples[i];
             const glm::vec3 x = s.position + samples.origin;
             Rng rng(settings.seed, RngDomain::direct_light, s.pixel);
+            const bool glossy = (s.flags & kGlossy) != 0;
+            const glm::vec3 diffuse = s.albedo * inv_pi;
+            // Σ over lights of incident radiance × cos, weighted by the BRDF where it depends on the direction
+            // (glossy), or by nothing where it does not (a diffuse sample's ρ/π is applied once, at the end).
             glm::vec3 sum(0.0f);
             for (size_t l = 0; l < sources.size(); ++l) {
                 const int n = sources.is_delta(l) ? 1 : settings.samples_per_light;
                 glm::vec3 light_sum(0.0f);
                 for (int k = 0; k < n; ++k) {
                     const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+                    if (glossy && sources.is_world(l)) {
+                        // A glossy lobe under the sky: the world's cosine-weighted directions would almost never
+                        // fall into a sharp lobe, so the lobe samples its own directions (weight f·cos/pdf), and
+                        // light sampling is kept for the diffuse part only (zero for a pure glossy surface).
+                        const GgxSample g = sample_ggx_reflection(s.specular, s.roughness, s.shading_normal, s.wo,
+                                                                  u1, u2);
+                        if (g.pdf > 0.0f && glm::dot(g.direction, s.normal) > 0.0f) {
+                            ++rays;
+                            const Ray ray{offset_ray_origin(x, s.normal), g.direction};
+                            if (!tracer.occluded(ray, 0.0f, std::numeric_limits<float>::infinity()))
+                                light_sum += g.weight * scene.background();
+                        }
+                        if (diffuse == glm::vec3(0.0f)) continue;
+                    }
                     const LightIncidence in = sources.sample_incidence(l, x, s.normal, u1, u2, u3);
                     // Light must arrive on the side the camera sees; the shading normal only weights it.
                     if (!(glm::dot(in.wi, s.normal) > 0.0f)) continue;
@@ -55,11 +76,16 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                     const Ray shadow{offset_ray_origin(x, s.normal), in.wi};
                     // Stop just short of the light's own point so the light's surroundings still shadow it.
                     if (tracer.occluded(shadow, 0.0f, in.distance * (1.0f - 1e-4f))) continue;
-                    light_sum += in.value * cos_shading;
+                    if (!glossy)
+                        light_sum += in.value * cos_shading;
+                    else if (sources.is_world(l))
+                        light_sum += in.value * cos_shading * diffuse;  // the glossy lobe was sampled above
+                    else
+                        light_sum += in.value * cos_shading * glm::vec3(sample_brdf(s, in.wi));
                 }
                 sum += light_sum / static_cast<float>(n);
             }
-            out[i] = s.throughput * s.albedo * inv_pi * sum;
+            out[i] = s.throughput * (glossy ? sum : diffuse * sum);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

@@ -4,7 +4,9 @@
 //   2. sort (key, sample index): the index breaks ties, so the order never depends on the thread count;
 //   3. leaves = runs of equal keys; each leaf's samples are one contiguous range of sample_order;
 //   4. parents = key >> 3, level by level, bottom-up; a group of one is promoted instead of getting a parent;
-//   5. lay the nodes out breadth-first, so that every node's children are contiguous.
+//   5. lay the nodes out breadth-first, so that every node's children are contiguous;
+//   6. with normal cones asked for: a cone and flags per leaf from its samples, then per parent from its children,
+//      in reverse layout order (children come after their parent), all in double.
 #include "photonsplat/hierarchy.h"
 
 #include <algorithm>
@@ -13,12 +15,14 @@
 #include <string>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/validation.h"
 #include "photonsplat/view_samples.h"
 
 namespace ps {
@@ -172,6 +176,171 @@ std::vector<KeyedSample> key_samples(const ViewSamples& samples, const ClusterKe
     return keyed;
 }
 
+// --- normal cones -----------------------------------------------------------------------------------------
+// Built in double; stored as float with the slack below, which covers the float rounding of the stored axis and
+// of cos θ, sin θ (~1e-7 rad) many times over.
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kLeafConeSlack = 1e-4;   // rad, added to a leaf's largest angle (the dossier's inflation)
+constexpr double kMergeConeSlack = 1e-6;  // rad, added by each merge (acos and float storage rounding)
+// A normal is "regular" when finite and of length 1 within this: the cone tests rely on it.
+constexpr double kUnitTolerance = cone_tests::kNormalLengthTolerance;
+
+struct DCone {
+    glm::dvec3 axis{0.0, 0.0, 1.0};
+    double angle = kPi;  // >= π: full
+    bool full() const { return !(angle < kPi); }
+};
+
+double angle_between(const glm::dvec3& a, const glm::dvec3& b) {  // both unit
+    return std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0));
+}
+
+DCone full_cone() { return DCone{}; }
+
+// Unit directions → the cone around their normalised sum. `unit` are already normalised.
+DCone cone_of_unit_directions(const glm::dvec3* unit, size_t count) {
+    if (count == 0) return full_cone();
+    glm::dvec3 sum(0.0);
+    for (size_t i = 0; i < count; ++i) sum += unit[i];
+    const double length = glm::length(sum);
+    if (!(length > 1e-9 * double(count))) return full_cone();  // the directions cancel: no useful axis
+    DCone cone;
+    cone.axis = sum / length;
+    double min_cos = 1.0;
+    for (size_t i = 0; i < count; ++i) min_cos = std::min(min_cos, glm::dot(cone.axis, unit[i]));
+    cone.angle = std::acos(std::clamp(min_cos, -1.0, 1.0)) + kLeafConeSlack;
+    if (cone.full()) return full_cone();
+    return cone;
+}
+
+// The smallest cone containing both (the dossier's merge, 1.4.3): around the great-circle arc between the axes.
+DCone merge(const DCone& a, const DCone& b) {
+    if (a.full() || b.full()) return full_cone();
+    const double phi = angle_between(a.axis, b.axis);
+    if (phi + b.angle <= a.angle) return a;
+    if (phi + a.angle <= b.angle) return b;
+    const double angle = 0.5 * (phi + a.angle + b.angle);
+    if (!(angle + kMergeConeSlack < kPi)) return full_cone();
+    DCone cone;
+    const double t = angle - a.angle;  // rotate a's axis towards b's by t, along the arc between them
+    if (phi < 1e-9) {
+        cone.axis = a.axis;
+    } else {
+        const glm::dvec3 v = glm::normalize(a.axis * std::sin(phi - t) + b.axis * std::sin(t));
+        cone.axis = v;
+    }
+    // The slerp puts the new axis at `angle − a.angle` from a and `angle − b.angle` from b in exact arithmetic;
+    // measure the actual angles rather than trusting that, so rounding can only widen the cone.
+    cone.angle = std::max(angle_between(cone.axis, a.axis) + a.angle, angle_between(cone.axis, b.axis) + b.angle) +
+                 kMergeConeSlack;
+    if (cone.full()) return full_cone();
+    return cone;
+}
+
+// A cone containing all the children's: the best of pairwise merging in order and of the children's mean axis.
+DCone merge_all(const DCone* cones, size_t count) {
+    if (count == 0) return full_cone();
+    DCone pairwise = cones[0];
+    glm::dvec3 sum(0.0);
+    for (size_t c = 0; c < count; ++c) {
+        if (cones[c].full()) return full_cone();
+        if (c > 0) pairwise = merge(pairwise, cones[c]);
+        sum += cones[c].axis;
+    }
+    const double length = glm::length(sum);
+    if (length > 1e-9) {
+        DCone mean;
+        mean.axis = sum / length;
+        mean.angle = 0.0;
+        for (size_t c = 0; c < count; ++c)
+            mean.angle = std::max(mean.angle, angle_between(mean.axis, cones[c].axis) + cones[c].angle);
+        mean.angle += kMergeConeSlack;
+        if (mean.angle < pairwise.angle) return mean.full() ? full_cone() : mean;
+    }
+    return pairwise;
+}
+
+NormalCone to_float(const DCone& cone) {
+    NormalCone out;  // full by default
+    if (cone.full()) return out;
+    out.axis = glm::vec3(cone.axis);
+    out.cos_angle = float(std::cos(cone.angle));
+    out.sin_angle = float(std::sin(cone.angle));
+    if (out.cos_angle <= -1.0f) return NormalCone{};
+    return out;
+}
+
+DCone to_double(const NormalCone& cone) {
+    if (cone.full()) return full_cone();
+    const glm::dvec3 axis(cone.axis);
+    const double length = glm::length(axis);
+    if (!(length > 0.0) || !std::isfinite(length)) return full_cone();
+    DCone out;
+    out.axis = axis / length;
+    // The float axis is within ~1e-7 rad of the one the cone was built around: widen by that.
+    out.angle = std::atan2(double(cone.sin_angle), double(cone.cos_angle)) + kMergeConeSlack;
+    if (!(out.angle >= 0.0)) return full_cone();
+    return out.full() ? full_cone() : out;
+}
+
+// Fills hierarchy.cones and node_flags: leaves from their samples, then parents from their children, level by
+// level from the deepest; in parallel, with the same result for any thread count.
+void build_cones(const ViewSamples& samples, ClusterHierarchy& h) {
+    const size_t node_count = h.nodes.size();
+    std::vector<DCone> cones(node_count);
+    h.node_flags.assign(node_count, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, h.leaves.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<glm::dvec3> unit;
+        for (size_t l = r.begin(); l != r.end(); ++l) {
+            const uint32_t index = h.leaves[l];
+            const ClusterNode& node = h.nodes[index];
+            uint8_t flags = kNodeDiffuseOnly | kNodeRegular;
+            bool cone_ok = true;
+            unit.clear();
+            for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+                const ViewSample& s = samples.samples[h.sample_order[k]];
+                if ((s.flags & kGlossy) || s.specular != glm::vec3(0.0f)) flags &= uint8_t(~kNodeDiffuseOnly);
+                const glm::dvec3 n(s.normal);
+                const double length = glm::length(n);
+                const bool unit_normal = std::isfinite(length) && std::fabs(length - 1.0) <= kUnitTolerance;
+                if (!unit_normal) cone_ok = false;  // the cone tests assume unit normals: say nothing here
+                if (!unit_normal || !is_finite(s.position)) flags &= uint8_t(~kNodeRegular);
+                if (unit_normal) unit.push_back(n / length);
+            }
+            cones[index] = cone_ok ? cone_of_unit_directions(unit.data(), unit.size()) : full_cone();
+            h.node_flags[index] = flags;
+        }
+    });
+    // The breadth-first layout puts each level in one contiguous range of nodes, deeper levels after: merge a
+    // level at a time from the deepest up, each level in parallel (a node needs only its children).
+    std::vector<uint32_t> level_begin{0};  // level d is nodes [level_begin[d], level_begin[d + 1])
+    {
+        std::vector<int> depth(node_count, 0);
+        for (size_t i = 0; i < node_count; ++i) {
+            const ClusterNode& node = h.nodes[i];
+            if (i > 0 && depth[i] != depth[i - 1]) level_begin.push_back(uint32_t(i));
+            for (uint32_t c = node.first_child; c != node.first_child + node.child_count; ++c) depth[c] = depth[i] + 1;
+        }
+        level_begin.push_back(uint32_t(node_count));
+    }
+    for (size_t level = level_begin.size() - 1; level-- > 0;) {
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(level_begin[level], level_begin[level + 1], 256),
+            [&](const tbb::blocked_range<size_t>& r) {
+                for (size_t i = r.begin(); i != r.end(); ++i) {
+                    const ClusterNode& node = h.nodes[i];
+                    if (node.child_count == 0) continue;
+                    cones[i] = merge_all(&cones[node.first_child], node.child_count);
+                    uint8_t flags = kNodeDiffuseOnly | kNodeRegular;
+                    for (uint32_t c = 0; c < node.child_count; ++c) flags &= h.node_flags[node.first_child + c];
+                    h.node_flags[i] = flags;
+                }
+            });
+    }
+    h.cones.resize(node_count);
+    for (size_t i = 0; i < node_count; ++i) h.cones[i] = to_float(cones[i]);
+}
+
 // A node while the tree is built bottom-up; children index `child_ids`, not yet laid out.
 struct BuildNode {
     Box box;
@@ -196,9 +365,67 @@ size_t ClusterHierarchy::bytes() const {
            leaves.capacity() * sizeof(uint32_t);
 }
 
+size_t ClusterHierarchy::cone_bytes() const {
+    return cones.capacity() * sizeof(NormalCone) + node_flags.capacity() * sizeof(uint8_t);
+}
+
+NormalCone cone_of_directions(const std::vector<glm::vec3>& directions) {
+    std::vector<glm::dvec3> unit;
+    for (const glm::vec3& d : directions) {
+        const glm::dvec3 v(d);
+        const double length = glm::length(v);
+        if (!(length > 0.0) || !std::isfinite(length)) return NormalCone{};
+        unit.push_back(v / length);
+    }
+    return to_float(cone_of_unit_directions(unit.data(), unit.size()));
+}
+
+NormalCone merge_cones(const NormalCone& a, const NormalCone& b) { return to_float(merge(to_double(a), to_double(b))); }
+
+namespace cone_tests {
+
+PhotonCone photon_cone(const glm::vec3& wi_in, const glm::vec3& normal_in, float cos_tolerance) {
+    PhotonCone pc;
+    const glm::dvec3 wi(wi_in), np(normal_in);
+    const double w = glm::length(wi), length = glm::length(np);
+    if (std::isfinite(w) && w > 1e-30) {
+        pc.wi = glm::vec3(wi / w);
+        pc.facing = true;
+    }
+    const double t = cos_tolerance;
+    if (!(std::isfinite(length) && length > 1e-30 && std::isfinite(t))) return pc;
+    pc.n = glm::vec3(np / length);
+    pc.orientation = true;
+    const double error = kDotErrorPerLength * length, d = kNormalLengthTolerance;
+    // A sample surely fails when |n|·L·cos φ + error <= t for every |n| in [1 − d, 1 + d]: cos φ <= `reject`.
+    const double q = (t - error) / length;
+    const double reject = q >= 0.0 ? q / (1.0 + d) : q / (1.0 - d);
+    if (reject >= 1.0) {
+        pc.fails_all = true;
+    } else if (reject > -1.0) {
+        pc.reject_angle = true;
+        pc.reject_cos = float(reject);
+        pc.reject_sin = float(std::sqrt(1.0 - reject * reject));
+    }
+    // A sample surely passes when |n|·L·cos φ − error > t for every |n|: cos φ > `accept`.
+    const double q2 = (t + error) / length;
+    const double accept = q2 >= 0.0 ? q2 / (1.0 - d) : q2 / (1.0 + d);
+    if (accept < -1.0) {
+        pc.passes_all = true;
+    } else if (accept < 1.0) {
+        pc.accept_angle = true;
+        pc.accept_cos = float(accept);
+        pc.accept_sin = float(std::sqrt(1.0 - accept * accept));
+    }
+    return pc;
+}
+
+}  // namespace cone_tests
+
 uint32_t depth_slice(float depth, const ClusterKeyParams& params) { return DepthSlicer(params)(depth); }
 
-ClusterHierarchy build_cluster_hierarchy(const ViewSamples& samples, const ClusterKeyParams& params) {
+ClusterHierarchy build_cluster_hierarchy(const ViewSamples& samples, const ClusterKeyParams& params,
+                                         const ClusterBuildOptions& options) {
     check_inputs(samples, params);
     ClusterHierarchy hierarchy;
     if (samples.samples.empty()) return hierarchy;
@@ -290,6 +517,7 @@ ClusterHierarchy build_cluster_hierarchy(const ViewSamples& samples, const Clust
     hierarchy.depth = *std::max_element(node_depth.begin(), node_depth.end());
     hierarchy.leaves.resize(leaf_count);
     for (size_t l = 0; l < leaf_count; ++l) hierarchy.leaves[l] = layout_index[l];
+    if (options.normal_cones) build_cones(samples, hierarchy);
     return hierarchy;
 }
 

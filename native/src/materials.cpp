@@ -12,6 +12,7 @@ const char* to_string(MaterialKind kind) {
         case MaterialKind::diffuse: return "diffuse";
         case MaterialKind::mirror: return "mirror";
         case MaterialKind::glass: return "glass";
+        case MaterialKind::glossy: return "glossy";
     }
     return "?";
 }
@@ -20,7 +21,8 @@ MaterialKind material_kind_from_string(const std::string& name) {
     if (name == "diffuse") return MaterialKind::diffuse;
     if (name == "mirror") return MaterialKind::mirror;
     if (name == "glass") return MaterialKind::glass;
-    throw InvalidInput("material.kind", "must be 'diffuse', 'mirror' or 'glass', got '" + name + "'");
+    if (name == "glossy") return MaterialKind::glossy;
+    throw InvalidInput("material.kind", "must be 'diffuse', 'mirror', 'glass' or 'glossy', got '" + name + "'");
 }
 
 void validate(const Material& m, const std::string& where) {
@@ -30,6 +32,9 @@ void validate(const Material& m, const std::string& where) {
     require_nonnegative_rgb(m.emission, where + ".emission");
     if (m.kind == MaterialKind::glass && !(std::isfinite(m.ior) && m.ior > 0.0f))
         throw InvalidInput(where + ".ior", "must be finite and > 0, got " + std::to_string(m.ior));
+    // Checked for every kind (the default 0.5 is valid), so a bad value never waits for a kind change to bite.
+    if (!(std::isfinite(m.roughness) && m.roughness >= 0.0f && m.roughness <= 1.0f))
+        throw InvalidInput(where + ".roughness", "must be finite and in [0, 1], got " + std::to_string(m.roughness));
 }
 
 }  // namespace ps

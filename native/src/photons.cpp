@@ -73,12 +73,25 @@ void trace_one_photon(const Scene& scene, const LightSources& sources, size_t so
             ray = Ray{offset_ray_origin(s.position, side), step.direction};
             continue;
         }
-        // Diffuse hit. The first one is direct light, which shadow rays already account for.
+        // Diffuse or glossy hit. The first one is direct light, which shadow rays already account for. A glossy
+        // bounce is not specular: like a diffuse one it ends the L S+ D prefix of caustic paths.
         if (vertex > 0) {
             out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, power,
                                  only_specular_so_far ? static_cast<uint32_t>(kCaustic) : 0u});
         }
         only_specular_so_far = false;
+        if (m.is_glossy()) {
+            // Importance-sample the GGX lobe; its weight f·cos/pdf = F·G1 <= 1 is then played by Russian
+            // roulette, so surviving photons keep the power they arrived with (per channel, up to the tint).
+            const float v1 = rng.uniform(), v2 = rng.uniform();
+            const GlossyStep step = scatter_glossy(m, s, ray.direction, v1, v2);
+            if (!step.valid) return;
+            const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
+            if (!(keep > 0.0f) || rng.uniform() >= keep) return;
+            power *= step.weight / keep;
+            ray = Ray{offset_ray_origin(s.position, s.geometric_normal), step.direction};
+            continue;
+        }
         const float keep = std::max({m.color.x, m.color.y, m.color.z});
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
         power *= m.color / keep;

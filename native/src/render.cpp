@@ -67,6 +67,8 @@ void validate(const RenderSettings& s) {
             "normal_tolerance", "must be in (0, 180] degrees", s.normal_tolerance);
     require(std::isfinite(s.plane_distance) && s.plane_distance >= 0.0f, "plane_distance",
             "must be finite and >= 0 (0 = off)", s.plane_distance);
+    require(s.directional_level >= -1 && s.directional_level <= 64, "directional_level",
+            "must be in [-1, 64] (-1 = chosen from the radius)", s.directional_level);
 }
 
 float default_radius(const Scene& scene, uint64_t photons) {
@@ -127,25 +129,49 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         params.cos_normal_tolerance = std::cos(settings.normal_tolerance * 3.14159265358979f / 180.0f);
         params.plane_distance_factor = settings.plane_distance;
         params.emitted = std::max<uint64_t>(photons.emitted, 1);
+        params.kernel = settings.kernel;
+        params.directional_level = settings.directional_level;
         std::vector<glm::vec3> indirect;
-        if (settings.method == SplatMethod::brute) {
-            control.begin_stage("splat (brute)", 0.45, 0.98);
-            StageTimer t(stats, "splat");
-            indirect = splat_brute(samples, photons, params, control, stats);
-        } else {
-            control.begin_stage("cluster hierarchy", 0.45, 0.5);
-            ClusterHierarchy hierarchy;
-            {
-                StageTimer t(stats, "hierarchy_build");
-                hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera));
+        const std::string splat_stage = std::string("splat (") + to_string(settings.method) + ")";
+        switch (settings.method) {
+            case SplatMethod::brute:
+            case SplatMethod::tiled:
+            case SplatMethod::gather: {
+                control.begin_stage(splat_stage, 0.45, 0.98);
+                StageTimer t(stats, "splat");
+                if (settings.method == SplatMethod::brute)
+                    indirect = splat_brute(samples, photons, params, control, stats);
+                else if (settings.method == SplatMethod::tiled)
+                    indirect = splat_tiled(samples, camera, photons, params, control, stats);
+                else
+                    indirect = splat_gather(samples, photons, params, control, stats);
+                break;
             }
-            stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
-            stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
-            stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
-            control.check();
-            control.begin_stage("splat (cluster)", 0.5, 0.98);
-            StageTimer t(stats, "splat");
-            indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
+            case SplatMethod::cluster:
+            case SplatMethod::cluster_cone:
+            case SplatMethod::directional: {
+                control.begin_stage("cluster hierarchy", 0.45, 0.5);
+                ClusterHierarchy hierarchy;
+                {
+                    StageTimer t(stats, "hierarchy_build");
+                    ClusterBuildOptions build_options;
+                    build_options.normal_cones = settings.method == SplatMethod::cluster_cone;
+                    hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), build_options);
+                }
+                stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
+                stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
+                stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
+                control.check();
+                control.begin_stage(splat_stage, 0.5, 0.98);
+                StageTimer t(stats, "splat");
+                if (settings.method == SplatMethod::cluster)
+                    indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
+                else if (settings.method == SplatMethod::cluster_cone)
+                    indirect = splat_cluster_cone(hierarchy, samples, photons, params, control, stats);
+                else
+                    indirect = splat_directional(hierarchy, samples, photons, params, control, stats);
+                break;
+            }
         }
         control.check();
 

@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "photonsplat/brdf.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
@@ -103,8 +104,8 @@ SpecularStep scatter_specular(const Material& material, const SurfacePoint& surf
     const glm::vec3 n = surface.shading_normal;  // faces the incoming ray
     const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
     const glm::vec3 reflected = glm::normalize(direction + 2.0f * cos_i * n);
-    if (material.kind == MaterialKind::mirror) {
-        // Fresnel-Schlick with the metal's tint as F0.
+    if (material.kind != MaterialKind::glass) {
+        // Mirror, or glossy smooth enough to be one: Fresnel-Schlick with the metal's tint as F0.
         const float m = std::pow(1.0f - cos_i, 5.0f);
         return {reflected, material.color + (glm::vec3(1.0f) - material.color) * m, false};
     }
@@ -116,6 +117,16 @@ SpecularStep scatter_specular(const Material& material, const SurfacePoint& surf
     // Radiance's (n_t/n_i)² factor is left out: it cancels on the way in and out of closed objects.
     const glm::vec3 refracted = glm::normalize(eta * direction + (eta * cos_i - cos_t) * n);
     return {refracted, material.color, true};
+}
+
+GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
+                          float u1, float u2) {
+    // As for view samples: a shading normal turned away from the arriving direction falls back to the geometric one.
+    const glm::vec3 n =
+        glm::dot(surface.shading_normal, -direction) > 1e-3f ? surface.shading_normal : surface.geometric_normal;
+    const GgxSample g = sample_ggx_reflection(material.color, material.glossy_alpha(), n, -direction, u1, u2);
+    const bool valid = g.pdf > 0.0f && glm::dot(g.direction, surface.geometric_normal) > 0.0f;
+    return {g.direction, valid ? g.weight : glm::vec3(0.0f), valid};
 }
 
 }  // namespace ps

@@ -24,8 +24,11 @@ size_t ViewSamples::bytes() const {
 
 namespace {
 
-// Follows one camera ray through mirrors and glass. Returns true and fills `sample` at the first diffuse hit;
-// adds emission and background seen along the way to `emitted`.
+// Below this cosine between the shading normal and the viewer, a glossy sample shades with its geometric normal.
+constexpr float kMinGlossyCosine = 1e-3f;
+
+// Follows one camera ray through mirrors and glass. Returns true and fills `sample` at the first non-specular
+// (diffuse or glossy) hit; adds emission and background seen along the way to `emitted`.
 bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& rng, int max_specular_depth,
                        ViewSample& sample, glm::vec3& emitted, float& alpha) {
     const RayTracer& tracer = scene.ray_tracer();
@@ -47,9 +50,24 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
             sample.normal = s.geometric_normal;
             sample.shading_normal = s.shading_normal;
             sample.wo = -ray.direction;
-            sample.albedo = s.material->color;
             sample.throughput = throughput;
             sample.flags = depth > 0 ? kViaSpecular : 0u;
+            if (s.material->is_glossy()) {
+                // A pure GGX lobe (no diffuse part): F0 = colour, α = roughness².
+                sample.albedo = glm::vec3(0.0f);
+                sample.specular = s.material->color;
+                sample.roughness = s.material->glossy_alpha();
+                sample.flags |= kGlossy;
+                // Where interpolation tilts the shading normal away from the viewer (silhouettes of smooth
+                // meshes), the lobe would see ωo below its surface and reflect nothing: black rims. Use the
+                // geometric normal there, which always faces the viewer.
+                if (!(glm::dot(sample.shading_normal, sample.wo) > kMinGlossyCosine))
+                    sample.shading_normal = sample.normal;
+            } else {
+                sample.albedo = s.material->color;
+                sample.specular = glm::vec3(0.0f);
+                sample.roughness = 0.0f;
+            }
             return true;
         }
         if (depth >= max_specular_depth) return false;

@@ -100,8 +100,63 @@ def test_principled_maps_to_the_dominant_lobe(empty_scene):
 def test_principled_approximations_are_noted(empty_scene):
     rough_metal, _ = node_material("RM", "ShaderNodeBsdfPrincipled", Metallic=0.7, Roughness=0.4)
     spec = materials.convert_material(rough_metal)
-    assert spec.kind == "mirror"
-    assert any("Metallic" in n for n in spec.notes) and any("Roughness" in n for n in spec.notes)
+    assert spec.kind == "glossy" and spec.roughness == pytest.approx(0.4)
+    assert any("Metallic" in n for n in spec.notes)
+    assert not any("Roughness" in n for n in spec.notes), "a rough metal is rendered rough now"
+
+
+def test_rough_metals_become_glossy_with_their_roughness(empty_scene):
+    gold, _ = node_material("Gold", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0,
+                            Roughness=0.35)
+    brushed, node = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.3)
+    node.distribution = 'GGX'
+    polished, _ = node_material("Polished", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.05)
+    smooth_metal, _ = node_material("Chrome", "ShaderNodeBsdfPrincipled", Metallic=1.0, Roughness=0.05)
+    g, b, p, c = (materials.convert_material(x) for x in (gold, brushed, polished, smooth_metal))
+    assert g.kind == "glossy" and approx(g.color, (1.0, 0.77, 0.34)) and g.notes == []
+    assert g.roughness == pytest.approx(0.35)
+    assert b.kind == "glossy" and b.roughness == pytest.approx(0.3) and approx(b.color, (0.9, 0.9, 0.9))
+    assert b.notes == []
+    assert b.core_arguments()["roughness"] == pytest.approx(0.3) and b.core_arguments()["kind"] == "glossy"
+    assert "roughness 0.30" in b.describe()
+    # At or below 0.05 a metal is a perfect mirror, as Cycles users expect (alpha <= 0.0025).
+    assert (p.kind, p.notes) == ("mirror", []) and (c.kind, c.notes) == ("mirror", [])
+
+
+def test_glossy_distributions_other_than_ggx_are_noted(empty_scene):
+    beckmann, node = node_material("Beck", "ShaderNodeBsdfGlossy", Roughness=0.4)
+    node.distribution = 'BECKMANN'
+    multi, node = node_material("Multi", "ShaderNodeBsdfGlossy", Roughness=0.4)
+    node.distribution = 'MULTI_GGX'
+    principled, node = node_material("PM", "ShaderNodeBsdfPrincipled", Metallic=1.0, Roughness=0.6)
+    node.distribution = 'MULTI_GGX'
+    for mat, label in ((beckmann, "Beckmann"), (multi, "Multiscatter GGX"), (principled, "Multiscatter GGX")):
+        spec = materials.convert_material(mat)
+        assert spec.kind == "glossy" and any(label in n and "GGX" in n for n in spec.notes), spec.notes
+    # A smooth one is a mirror whatever its distribution: nothing to note.
+    smooth, node = node_material("SmoothBeck", "ShaderNodeBsdfGlossy", Roughness=0.0)
+    node.distribution = 'BECKMANN'
+    assert materials.convert_material(smooth).notes == []
+
+
+def test_rough_glass_is_still_rendered_smooth_with_a_note(empty_scene):
+    glass, _ = node_material("Frosted", "ShaderNodeBsdfGlass", IOR=1.5, Roughness=0.3)
+    principled, _ = node_material("PFrosted", "ShaderNodeBsdfPrincipled", Transmission=1.0, Roughness=0.3)
+    for mat in (glass, principled):
+        spec = materials.convert_material(mat)
+        assert spec.kind == "glass" and any("Roughness 0.30" in n and "smooth" in n for n in spec.notes)
+
+
+def test_glossy_roughness_reaches_the_core(empty_scene):
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    metal, _ = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.8, 0.6, 0.4, 1.0), Roughness=0.45)
+    plane.data.materials.append(metal)
+    frame = export_current()
+    (exported,) = frame.scene.materials
+    assert exported["kind"] == "glossy" and exported["roughness"] == pytest.approx(0.45)
+    assert approx(exported["color"], (0.8, 0.6, 0.4))
 
 
 def test_basic_shaders(empty_scene):

@@ -233,6 +233,50 @@ TEST(ClusterHierarchy, RandomSampleSetsAreValid) {
     }
 }
 
+// Cones are an option of the build: the tree is the same with them, and every node's cone holds its samples'
+// normals (tests/native/test_cones.cpp checks the cones in depth).
+TEST(ClusterHierarchy, BuiltWithNormalConesIsTheSameValidTree) {
+    for (uint32_t seed = 1; seed <= 3; ++seed) {
+        const int w = 45 + 11 * int(seed), h = 33 + 5 * int(seed);
+        const ViewSamples vs = random_samples(w, h, seed);
+        const ClusterKeyParams params = perspective_params(w, h);
+        SCOPED_TRACE(seed);
+        ClusterBuildOptions options;
+        options.normal_cones = true;
+        const ClusterHierarchy with = build_cluster_hierarchy(vs, params, options);
+        const ClusterHierarchy without = build_cluster_hierarchy(vs, params);
+        expect_valid_hierarchy(with, vs, params);
+        ASSERT_TRUE(with.has_cones());
+        EXPECT_FALSE(without.has_cones());
+        ASSERT_EQ(with.nodes.size(), without.nodes.size());
+        EXPECT_EQ(0, std::memcmp(with.nodes.data(), without.nodes.data(), with.nodes.size() * sizeof(ClusterNode)));
+        EXPECT_EQ(with.sample_order, without.sample_order);
+        EXPECT_EQ(with.bytes(), without.bytes());  // cones are counted apart
+        EXPECT_EQ(with.cone_bytes(), with.nodes.size() * (sizeof(NormalCone) + 1));
+        for (size_t i = 0; i < with.nodes.size(); ++i) {
+            const NormalCone& cone = with.cones[i];
+            for (uint32_t k = with.nodes[i].sample_begin; k < with.nodes[i].sample_end; ++k) {
+                const glm::vec3 n = glm::normalize(vs.samples[with.sample_order[k]].normal);
+                if (!cone.full()) EXPECT_GE(double(glm::dot(glm::normalize(cone.axis), n)), double(cone.cos_angle));
+            }
+            EXPECT_EQ(with.node_flags[i], kNodeDiffuseOnly | kNodeRegular);  // all diffuse, unit normals
+        }
+    }
+}
+
+TEST(ClusterHierarchy, ConesAreTheSameWithOneAndTwoThreads) {
+    const ViewSamples vs = random_samples(160, 120, 6);
+    const ClusterKeyParams params = perspective_params(160, 120);
+    ClusterBuildOptions options;
+    options.normal_cones = true;
+    ClusterHierarchy a, b;
+    tbb::task_arena(1).execute([&] { a = build_cluster_hierarchy(vs, params, options); });
+    tbb::task_arena(2).execute([&] { b = build_cluster_hierarchy(vs, params, options); });
+    ASSERT_EQ(a.cones.size(), b.cones.size());
+    EXPECT_EQ(0, std::memcmp(a.cones.data(), b.cones.data(), a.cones.size() * sizeof(NormalCone)));
+    EXPECT_EQ(a.node_flags, b.node_flags);
+}
+
 TEST(ClusterHierarchy, OnlySamplesSeenThroughMirrors) {
     const ViewSamples vs = random_samples(37, 29, 7, /*specular_fraction=*/1.0);
     const ClusterKeyParams params = perspective_params(37, 29);

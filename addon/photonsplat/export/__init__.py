@@ -86,7 +86,8 @@ def render_settings(core, props):
     """scene.photonsplat -> core RenderSettings, field by field (the core validates the values)."""
     return core.RenderSettings(photons=props.photons, radius=props.radius, method=props.method,
                                max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
-                               direct_samples=props.direct_samples)
+                               direct_samples=props.direct_samples, kernel=props.kernel,
+                               directional_level=props.directional_level)
 
 
 class _MaterialTable:

@@ -1,9 +1,11 @@
-"""Blender materials -> the core's three surface types (diffuse, mirror, glass) plus emission.
+"""Blender materials -> the core's four surface types (diffuse, mirror, glass, glossy) plus emission.
 
 The core knows only:
   diffuse  Lambertian reflection, albedo = colour
   mirror   perfect specular reflection, Fresnel-Schlick with F0 = colour (a smooth metal)
   glass    smooth dielectric with index `ior`, refracted light tinted by colour
+  glossy   GGX microfacet reflection (a rough metal), Fresnel-Schlick with F0 = colour, alpha = roughness^2 as
+           in Cycles; the core itself renders roughness <= ROUGHNESS_SHARP as a mirror
 and every surface may also emit radiance `emission` (W/(sr m^2), both faces, as Cycles' Emission shader).
 
 We read the node tree Cycles would render (get_output_node('CYCLES')) and map the shader plugged into the
@@ -15,12 +17,24 @@ Known approximations that are NOT warned about, because they apply to nearly eve
     diffuse lobe is rendered as Lambert (Cycles adds a slight retro-reflection depending on Roughness).
   - Roughness below ROUGHNESS_SHARP is rendered as a perfectly smooth interface (Cycles' alpha = r^2 is then
     below 0.0025, visually sharp).
+  - Glossy BSDF and the Principled metal lobe are single-scatter GGX with Cycles 3.4's Smith shadowing. The
+    node's distribution is otherwise ignored: Beckmann and Ashikhmin-Shirley are rendered as GGX (noted), and
+    Multiscatter GGX without its multiple-scattering energy (slightly darker at high roughness; noted).
+
+Rough glass (and Refraction BSDF) stays perfectly smooth: the core has no rough dielectric; a note says so.
 """
 
+import math
 from dataclasses import dataclass, field
 
-# Above this roughness a glossy or glass surface visibly blurs in Cycles; we still render it sharp and warn.
+import numpy as np
+
+# Above this roughness a glossy or glass surface visibly blurs in Cycles: a metal becomes "glossy" (the core's
+# own threshold for a mirror is the same number); glass is still rendered sharp, with a warning.
 ROUGHNESS_SHARP = 0.05
+
+# The default of the core's add_material(roughness=...), used by every kind that has none.
+DEFAULT_ROUGHNESS = 0.5
 
 # Cycles renders objects without a material with a plain grey diffuse surface; so do we.
 DEFAULT_COLOR = (0.8, 0.8, 0.8)
@@ -33,9 +47,10 @@ BLACK = (0.0, 0.0, 0.0)
 class MaterialSpec:
     """One material as the core's add_material() takes it, plus the notes gathered while converting it."""
     name: str
-    kind: str = "diffuse"          # "diffuse" | "mirror" | "glass"
+    kind: str = "diffuse"          # "diffuse" | "mirror" | "glass" | "glossy"
     color: tuple = DEFAULT_COLOR
     ior: float = 1.45
+    roughness: float = DEFAULT_ROUGHNESS   # glossy only: Blender's roughness, in [0, 1]
     emission: tuple = BLACK
     notes: list = field(default_factory=list)
     # True when the shader reflects no light at all (an Emission shader, an unconnected shader socket):
@@ -45,13 +60,15 @@ class MaterialSpec:
     def core_arguments(self):
         """Keyword arguments for core Scene.add_material()."""
         return dict(name=self.name, kind=self.kind, color=tuple(self.color), ior=float(self.ior),
-                    emission=tuple(self.emission))
+                    emission=tuple(self.emission), roughness=float(self.roughness))
 
     def describe(self):
         """Short human description, e.g. for the material panel: 'glass, IOR 1.50'."""
         text = self.kind
         if self.kind == "glass":
             text += f", IOR {self.ior:.2f}"
+        if self.kind == "glossy":
+            text += f", roughness {self.roughness:.2f}"
         if any(c > 0.0 for c in self.emission):
             text += ", emitting"
         return text
@@ -96,6 +113,10 @@ def _finish(spec):
         spec.notes.append("colour outside [0, 1] clamped")
     spec.color = clamped
     spec.emission = tuple(max(c, 0.0) for c in spec.emission)
+    roughness = _clamp01(spec.roughness) if math.isfinite(spec.roughness) else DEFAULT_ROUGHNESS
+    if spec.kind == "glossy" and roughness != spec.roughness:
+        spec.notes.append(f"roughness {spec.roughness} outside [0, 1] replaced by {roughness:.2f}")
+    spec.roughness = roughness
     return spec
 
 
@@ -124,10 +145,11 @@ def _principled(node, name):
     # Cycles 3.4 weights: metal = metallic, glass = transmission * (1 - metallic),
     # diffuse = (1 - metallic)(1 - transmission). We keep the dominant lobe; metal wins ties like in Cycles.
     if metallic >= 0.5:
-        spec = MaterialSpec(name=name, kind="mirror", color=base)
+        spec = _metal(name, base, roughness)
         if metallic < 1.0:
             notes.append(f"Metallic {metallic:.2f} rendered as a pure metal")
-        _note_rough(notes, roughness)
+        if spec.kind == "glossy":
+            _note_distribution(notes, getattr(node, "distribution", "GGX"))
     elif transmission >= 0.5:
         spec = MaterialSpec(name=name, kind="glass", color=base, ior=ior)
         if transmission < 1.0 or metallic > 0.0:
@@ -166,10 +188,30 @@ def _diffuse(node, name):
     return spec
 
 
+def _is_rough(roughness):
+    """roughness > ROUGHNESS_SHARP as the core decides it, in float32: Blender stores 0.05 as 0.0500000007."""
+    return bool(np.float32(roughness) > np.float32(ROUGHNESS_SHARP))
+
+
+def _metal(name, color, roughness):
+    """A smooth metal is a mirror, a rough one glossy (GGX, alpha = roughness^2 in the core)."""
+    if _is_rough(roughness):
+        return MaterialSpec(name=name, kind="glossy", color=color, roughness=roughness)
+    return MaterialSpec(name=name, kind="mirror", color=color)
+
+
 def _glossy(node, name):
     notes = []
-    spec = MaterialSpec(name=name, kind="mirror", color=color_input(node, "Color", notes))
-    _note_rough(notes, float_input(node, "Roughness", notes))
+    distribution = getattr(node, "distribution", "GGX")
+    color = color_input(node, "Color", notes)
+    roughness = float_input(node, "Roughness", notes)
+    if distribution == "SHARP":
+        # Cycles renders the Sharp distribution as a perfect mirror whatever the roughness.
+        spec = MaterialSpec(name=name, kind="mirror", color=color)
+    else:
+        spec = _metal(name, color, roughness)
+    if spec.kind == "glossy":
+        _note_distribution(notes, distribution)
     if node.bl_idname == "ShaderNodeBsdfAnisotropic":
         notes.append("anisotropy ignored")
     spec.notes = notes
@@ -229,7 +271,7 @@ def _combine(first, w1, second, w2, what, notes):
 
     Emission adds exactly, and so do two diffuse surfaces (their albedos add). When one side has no surface
     (an Emission shader or an unconnected socket) the other one's colour is scaled by its weight: exact for
-    diffuse, close for mirror and glass (whose Fresnel reflection is not scaled). Two different surface types
+    diffuse, close for mirror, glossy and glass (whose Fresnel reflection is not scaled). Two different surface types
     cannot be blended by the core: the heavier one is kept and a note says so."""
     emission = tuple(w1 * a + w2 * b for a, b in zip(first.emission, second.emission))
     spec = MaterialSpec(name=first.name, emission=emission)
@@ -238,11 +280,12 @@ def _combine(first, w1, second, w2, what, notes):
     elif first.no_surface or second.no_surface:
         kept, weight = (second, w2) if first.no_surface else (first, w1)
         spec.kind, spec.color, spec.ior = kept.kind, _scaled(kept.color, weight), kept.ior
+        spec.roughness = kept.roughness
     elif first.kind == "diffuse" and second.kind == "diffuse":
         spec.color = tuple(w1 * a + w2 * b for a, b in zip(first.color, second.color))
     else:
         kept, weight = (first, w1) if w1 >= w2 else (second, w2)
-        spec.kind, spec.color, spec.ior = kept.kind, kept.color, kept.ior
+        spec.kind, spec.color, spec.ior, spec.roughness = kept.kind, kept.color, kept.ior, kept.roughness
         notes.append(f"{what} of {first.kind} and {second.kind} rendered as {kept.kind} alone")
     return spec
 
@@ -333,5 +376,17 @@ def _clamp01(value):
 
 
 def _note_rough(notes, roughness):
-    if roughness > ROUGHNESS_SHARP:
-        notes.append(f"Roughness {roughness:.2f} rendered perfectly smooth")
+    """For glass only: the core has no rough dielectric."""
+    if _is_rough(roughness):
+        notes.append(f"Roughness {roughness:.2f} rendered perfectly smooth (rough glass is not supported)")
+
+
+# Distributions the core renders exactly (Principled and Glossy BSDF's default); others become GGX with a note.
+_DISTRIBUTION_NAMES = {"BECKMANN": "Beckmann", "ASHIKHMIN_SHIRLEY": "Ashikhmin-Shirley",
+                       "MULTI_GGX": "Multiscatter GGX"}
+
+
+def _note_distribution(notes, distribution):
+    if distribution != "GGX":
+        label = _DISTRIBUTION_NAMES.get(distribution, str(distribution))
+        notes.append(f"{label} distribution rendered as GGX (single scattering)")

@@ -15,13 +15,15 @@ class Scene;
 struct RenderSettings {
     uint64_t photons = 200000;        // photon paths emitted
     float radius = 0.0f;              // kernel radius in world units; 0 = derived from the scene's size
-    SplatMethod method = SplatMethod::cluster;
+    SplatMethod method = SplatMethod::cluster_cone;
     int max_bounces = 8;              // photon path length bound, and camera-path specular depth bound
     uint64_t seed = 0;
     int threads = 0;                  // 0 = all cores
     int direct_samples = 4;           // shadow rays per light per view sample (soft shadows)
     float normal_tolerance = 60.0f;   // τ in degrees: photons on surfaces turned further away are ignored
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
+    Kernel kernel = Kernel::uniform;  // density-estimation kernel
+    int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
 };
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field

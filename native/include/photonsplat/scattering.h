@@ -32,7 +32,8 @@ glm::vec3 sample_cosine_hemisphere(const glm::vec3& n, float u1, float u2);  // 
 glm::vec3 sample_uniform_sphere(float u1, float u2);
 glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, float u2);
 
-// One stochastic step through a mirror or glass interface. `direction` is the travel direction of the ray.
+// One stochastic step through a mirror or glass interface (a glossy material at or below
+// kGlossyMirrorRoughness counts as a mirror here). `direction` is the travel direction of the ray.
 // The branch (reflect or refract) is chosen with probability equal to its Fresnel weight, so the returned
 // weight is the tint only: photon powers and path throughputs stay near equal.
 struct SpecularStep {
@@ -42,6 +43,20 @@ struct SpecularStep {
 };
 SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
                               float u);
+
+// One step off a glossy surface (Material::is_glossy()): the new direction importance-samples the GGX lobe
+// (brdf.h) around the shading normal (the geometric one where the shading normal faces away from the arriving
+// ray) for the arriving `direction` (travel direction of the ray), which holds for photons as well as for
+// camera paths since the lobe is reciprocal. `weight` = f_r cos θ / pdf <= 1; `valid` is false when the sampled
+// direction leaves below the shading or the geometric surface (the path ends: single-scattering GGX loses
+// that light, as its white furnace integral < 1 says).
+struct GlossyStep {
+    glm::vec3 direction;
+    glm::vec3 weight;
+    bool valid;
+};
+GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
+                          float u1, float u2);
 
 float luminance(const glm::vec3& rgb);
 

@@ -9,22 +9,40 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
+#include "photonsplat/brdf.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/view_samples.h"
 
 namespace ps {
 
+class Camera;
 class RenderControl;
 struct Stats;
 struct ClusterHierarchy;
 
+// The methods of the design (§2). All but `directional` are exact: the same photons give the same image as
+// `brute`, up to float summation order.
 enum class SplatMethod {
-    brute,    // every photon × every view sample: the oracle
-    cluster,  // view-sample cluster hierarchy, sphere-vs-box culling, per-leaf photon lists
+    brute,         // every photon × every view sample: the oracle
+    tiled,         // Mara et al. 2013: 32×32 screen tiles with per-tile depth bounds
+    cluster,       // view-sample cluster hierarchy, sphere-vs-box culling, per-leaf photon lists
+    cluster_cone,  // the paper's cluster-trivial: the hierarchy plus normal-cone trivial reject and accept
+    directional,   // the paper's approximation: flux per node of a fixed level in 8 direction bins
+    gather,        // the classic alternative: each view sample gathers photons from a hashed uniform grid
 };
 const char* to_string(SplatMethod method);
 SplatMethod splat_method_from_string(const std::string& name);  // throws InvalidInput
+std::vector<std::string> splat_method_names();                   // in the order above
+
+// The density-estimation kernel; both integrate to 1 over the disc of radius r.
+enum class Kernel {
+    uniform,       // K = 1/(π r²): makes the cluster_cone trivial accept exact
+    epanechnikov,  // K = 2/(π r²)·(1 − d²/r²): smoother
+};
+const char* to_string(Kernel kernel);
+Kernel kernel_from_string(const std::string& name);  // throws InvalidInput
 
 // Default of SplatParams::max_pairs_in_memory: 32 Mi (leaf, photon) pairs, about 300 MB of pair buffers and
 // per-leaf lists at the peak. A 1080p frame with 200k photons at a typical radius fits in one batch.
@@ -35,6 +53,8 @@ struct SplatParams {
     float cos_normal_tolerance = 0.5f;   // cos τ: reject when n_x·n_p <= cos τ
     float plane_distance_factor = 0.0f;  // κ: reject when |n_x·(x−p)| >= κ·r; 0 disables the test
     uint64_t emitted = 0;                // N_emitted of the photon map
+    Kernel kernel = Kernel::uniform;
+    int directional_level = -1;          // directional only: hierarchy level counted from the leaves; -1 = from r
     // Cluster method only: how many (leaf, photon) pairs may be held at once, each about 9 bytes at the peak
     // (4 in the traversal buffers, 4 in the per-leaf lists, plus the buffers' growth slack). The pairs grow as
     // photons × leaves touched, which a radius as large as the scene makes photons × all leaves: photons are then
@@ -66,10 +86,29 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
     return true;
 }
 
-// f_r(x, ωi, ωo)·Φ for one accepted photon: what a sample accumulates (in double) before the kernel.
-inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const Photon& photon) {
+// f_r(x, ωi, ωo): the view sample's BRDF for light arriving from ωi (towards the light), seen along s.wo.
+// albedo/π plus, for kGlossy samples only, the GGX lobe of brdf.h (F0 = s.specular, α = s.roughness).
+inline glm::dvec3 sample_brdf(const ViewSample& s, const glm::vec3& wi) {
     constexpr double inv_pi = 0.318309886183790671538;
-    return glm::dvec3(s.albedo) * inv_pi * glm::dvec3(photon.power);
+    const glm::dvec3 diffuse = glm::dvec3(s.albedo) * inv_pi;
+    if (!(s.flags & kGlossy)) return diffuse;
+    return diffuse + glm::dvec3(ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo));
+}
+
+// The kernel relative to the uniform one, so that finish_sample's 1/(π r²) applies to both:
+// 1 for uniform; 2·(1 − d²/r²) for Epanechnikov. `d` is x − p.
+inline double kernel_weight(const glm::vec3& d, const SplatParams& params) {
+    if (params.kernel == Kernel::uniform) return 1.0;
+    const double r2 = static_cast<double>(params.radius) * params.radius;
+    return 2.0 * (1.0 - static_cast<double>(glm::dot(d, d)) / r2);
+}
+
+// f_r·Φ·w for one photon that passed photon_reaches_sample: what a sample accumulates (in double) before
+// finish_sample. `p` is the photon position relative to the samples' origin.
+inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const glm::vec3& p, const Photon& photon,
+                                        const SplatParams& params) {
+    const glm::dvec3 f = sample_brdf(s, photon.wi) * glm::dvec3(photon.power);
+    return params.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params);
 }
 
 // Turns a sample's accumulated Σ f_r·Φ into radiance: × throughput × K / N_emitted, uniform K = 1/(π r²).
@@ -91,5 +130,23 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
 std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
                                      const PhotonMap& photons, const SplatParams& params,
                                      const RenderControl& control, Stats& stats);
+// The cluster method with normal-cone trivial reject and accept (needs a hierarchy built with cones).
+std::vector<glm::vec3> splat_cluster_cone(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                          const PhotonMap& photons, const SplatParams& params,
+                                          const RenderControl& control, Stats& stats);
+// Mara et al. 2013: per-tile frusta with depth bounds, photons binned by their sphere's screen bounds.
+std::vector<glm::vec3> splat_tiled(const ViewSamples& samples, const Camera& camera, const PhotonMap& photons,
+                                   const SplatParams& params, const RenderControl& control, Stats& stats);
+// Used by tiled: the screen rectangle (x_min, y_min, x_max, y_max), in pixel units (y = 0 at the top), holding
+// every image point whose camera ray passes within `radius` of `center` (relative to camera.position());
+// infinite when the sphere reaches the eye plane of a perspective camera.
+glm::dvec4 tiled_sphere_screen_bounds(const Camera& camera, const glm::vec3& center, float radius);
+// The approximate variant: traversal stops at level params.directional_level (or one chosen from r).
+std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                         const PhotonMap& photons, const SplatParams& params,
+                                         const RenderControl& control, Stats& stats);
+// Gathering from a hashed uniform grid of photons.
+std::vector<glm::vec3> splat_gather(const ViewSamples& samples, const PhotonMap& photons, const SplatParams& params,
+                                    const RenderControl& control, Stats& stats);
 
 }  // namespace ps

@@ -16,6 +16,7 @@ struct Stats;
 
 enum ViewSampleFlags : uint32_t {
     kViaSpecular = 1u,  // the camera path bounced off a mirror or through glass before reaching it
+    kGlossy = 2u,       // the surface has a glossy lobe (specular > 0): its BRDF depends on the directions
 };
 
 struct ViewSample {
@@ -23,7 +24,9 @@ struct ViewSample {
     glm::vec3 normal;          // geometric normal, flipped to face the arriving camera path
     glm::vec3 shading_normal;  // interpolated normal, on the same side as `normal`
     glm::vec3 wo;              // unit direction back along the camera path
-    glm::vec3 albedo;          // diffuse reflectance: BRDF = albedo / π
+    glm::vec3 albedo;          // diffuse reflectance: the diffuse lobe is albedo / π
+    glm::vec3 specular;        // glossy lobe's Fresnel F0 tint; 0 for a purely diffuse surface
+    float roughness;           // glossy lobe's GGX α (Blender roughness²); unused when specular is 0
     glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit)
     uint32_t pixel;            // y * width + x, y = 0 at the top
     uint32_t flags;            // ViewSampleFlags

@@ -27,6 +27,24 @@
 // photon per range; ranges_in_flight is lowered where the leaves are many for the cap so that this excess
 // stays under cap / 2. When everything fits, which a typical radius does, there is one batch, shaded once
 // traversal is over, as without batches; the pipeline then costs about what a parallel loop over chunks would.
+//
+// cluster_cone (Moreau et al. 2016, "cluster-trivial") is the same pipeline (ClusterSplat<true>) with the
+// hierarchy's normal cones. A node is also rejected when every normal in its cone faces away from the photon
+// (R2: n·ωi <= 0) or differs from the photon's normal by more than τ (R3: n·n_p <= cos τ); and it is ACCEPTED
+// whole when its box lies inside the sphere, every normal faces the photon and is within τ of n_p (A2, A3), all
+// its samples are diffuse-only and regular, and the plane-distance test is off or provably passed. Every test
+// is conservative with margins (cone_tests in hierarchy.h): an accept never includes a sample the per-sample
+// test would refuse, a reject never drops one it would take. An accept is a pair (node | kAcceptBit, photon)
+// in the same segment buffers; the serial output stage, which sees photons in ascending order, adds the
+// photon's power to the node's accumulator at once (so accepts never reach the lists): the sums are
+// deterministic. At the end a top-down pass adds every node's accumulator to its children's, and each sample
+// adds its leaf's total × its BRDF (diffuse: f = ρ/π whatever ωi) to what its list gave it.
+// Kernels: uniform K is constant inside the sphere, so the accumulator is ΣΦ. Epanechnikov stays exact through
+// per-node moments S0 = ΣΦ, S1 = ΣΦ·q, S2 = ΣΦ·|q|² with q = p − (node box centre) (dossier 1.4.4):
+//     ΣΦ·(1 − |x' − q|²/r²) = (1 − |x'|²/r²)·S0 + (2/r²)·x'·S1 − S2/r²,   x' = x − (box centre),
+// shifted to each child's centre on the way down (S1 += δ·S0, S2 += 2δ·S1 + |δ|²·S0). Its accept also asks the
+// box to lie within |x − p|² < 0.95·r², so that every accepted weight 2(1 − |x − p|²/r²) is >= 0.1, where the
+// per-sample path's float rounding of |x − p|² moves a weight by < 1e-5 relative.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -37,6 +55,7 @@
 #include <string>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
@@ -66,10 +85,36 @@ constexpr uint64_t kInFlightShareDivisor = 16;
 // are monotone too: so this is never larger than the distance the per-sample test computes for any sample
 // in the box. Rejecting when it is >= r² could therefore never lose a sample; the reject threshold adds a
 // 1e-5 relative margin on top in case the compiler contracts one of the two expressions into FMAs.
-float distance_sq_to_box(const glm::vec3& p, const ClusterNode& node) {
-    const glm::vec3 gap = glm::max(glm::max(node.box_min - p, p - node.box_max), glm::vec3(0.0f));
+inline float distance_sq_to_box(const glm::vec3& p, const glm::vec3& box_min, const glm::vec3& box_max) {
+    const glm::vec3 gap = glm::max(glm::max(box_min - p, p - box_max), glm::vec3(0.0f));
     return glm::dot(gap, gap);
 }
+inline float distance_sq_to_box(const glm::vec3& p, const ClusterNode& node) {
+    return distance_sq_to_box(p, node.box_min, node.box_max);
+}
+
+// cluster_cone's copy of a node: box, cone, children and flags in 48 bytes, so that a node test reads one
+// place (the traversal is bound by fetching nodes: three arrays cost three misses, and a 64-byte node more
+// bandwidth than it saves). `children` packs first_child (low 27 bits), child_count (4 bits) and whether the
+// node may be accepted (all diffuse-only and regular, top bit).
+constexpr uint32_t kConeNodeChildBits = 27;
+constexpr uint32_t kConeNodeAcceptable = 0x80000000u;
+struct alignas(16) ConeNode {
+    glm::vec3 box_min;
+    uint32_t children;
+    glm::vec3 box_max;
+    float cos_angle;
+    glm::vec3 axis;
+    float sin_angle;
+    uint32_t first_child() const { return children & ((1u << kConeNodeChildBits) - 1); }
+    uint32_t child_count() const { return (children >> kConeNodeChildBits) & 15u; }
+    bool acceptable() const { return (children & kConeNodeAcceptable) != 0; }
+    NormalCone cone() const { return NormalCone{axis, cos_angle, sin_angle}; }
+};
+static_assert(sizeof(ConeNode) == 48, "three nodes per three cache lines");
+
+// An accept pair's node carries this bit in the segment buffers (node indices stay below it: checked).
+constexpr uint32_t kAcceptBit = 0x80000000u;
 
 // How the cap is shared out (see the top of the file).
 struct PairBudget {
@@ -99,6 +144,8 @@ struct Segment {
     std::vector<uint32_t> leaves;  // the leaf node of every pair, photons ascending
     std::vector<uint32_t> ends;    // ends[j − begin]: one past photon j's last pair in `leaves`
     uint64_t node_tests = 0;
+    uint64_t rejects_distance = 0, rejects_facing = 0, rejects_orientation = 0;  // cluster_cone: also the cones'
+    uint64_t accepts = 0;  // cluster_cone: accept pairs (node | kAcceptBit in `leaves`)
     size_t bytes() const { return (leaves.capacity() + ends.capacity()) * sizeof(uint32_t); }
 };
 
@@ -117,6 +164,102 @@ private:
     std::atomic<int64_t> held_{0}, peak_{0};
 };
 
+// What cluster_cone accepted, per node: the sum of the accepted photons' power (uniform kernel), or their moments
+// about the node's box centre (Epanechnikov). Filled in photon order by the serial output stage; push_down then
+// turns every node's entry into the total of the node and its ancestors.
+class AcceptedFlux {
+public:
+    void init(const ClusterHierarchy& hierarchy, bool moments) {
+        moments_ = moments;
+        nodes_.assign(hierarchy.nodes.size(), Node());
+        if (moments_) {
+            first_.assign(3 * hierarchy.nodes.size(), glm::dvec3(0.0));
+            second_.assign(hierarchy.nodes.size(), glm::dvec3(0.0));
+            centres_.resize(hierarchy.nodes.size());
+            for (size_t i = 0; i < hierarchy.nodes.size(); ++i)
+                centres_[i] = 0.5 * (glm::dvec3(hierarchy.nodes[i].box_min) + glm::dvec3(hierarchy.nodes[i].box_max));
+        }
+    }
+    size_t bytes() const {
+        return nodes_.capacity() * sizeof(Node) +
+               (first_.capacity() + second_.capacity() + centres_.capacity()) * sizeof(glm::dvec3);
+    }
+
+    // Σ over accepts of the accepted node's samples: the (sample, photon) pairs reached through accepts.
+    uint64_t accepted_samples(const ClusterHierarchy& hierarchy) const {
+        uint64_t total = 0;
+        for (size_t i = 0; i < nodes_.size(); ++i)
+            total += uint64_t(nodes_[i].count) * (hierarchy.nodes[i].sample_end - hierarchy.nodes[i].sample_begin);
+        return total;
+    }
+
+    void add(uint32_t node, const glm::vec3& position, const Photon& photon) {
+        const glm::dvec3 power(photon.power);
+        Node& n = nodes_[node];
+        n.flux += power;
+        n.any = 1;
+        ++n.count;
+        if (moments_) {
+            const glm::dvec3 q = glm::dvec3(position) - centres_[node];
+            for (int c = 0; c < 3; ++c) first_[node * 3 + c] += power[c] * q;
+            second_[node] += power * glm::dot(q, q);
+        }
+    }
+
+    // Top-down over the breadth-first layout (parents before children): child += parent, moments shifted to the
+    // child's centre. Nodes under no accept keep nothing (and their centre, perhaps of an empty box, is unused).
+    void push_down(const ClusterHierarchy& hierarchy) {
+        for (size_t i = 0; i < hierarchy.nodes.size(); ++i) {
+            const ClusterNode& node = hierarchy.nodes[i];
+            if (!nodes_[i].any || node.child_count == 0) continue;
+            const glm::dvec3 flux = nodes_[i].flux;
+            for (uint32_t c = node.first_child; c != node.first_child + node.child_count; ++c) {
+                nodes_[c].any = 1;
+                nodes_[c].flux += flux;
+                if (!moments_) continue;
+                const glm::dvec3 delta = centres_[i] - centres_[c];  // q_child = q_parent + delta
+                double s2[3];
+                for (int k = 0; k < 3; ++k) {
+                    const glm::dvec3 s1 = first_[i * 3 + k] + delta * flux[k];
+                    s2[k] = second_[i][k] + 2.0 * glm::dot(delta, first_[i * 3 + k]) + glm::dot(delta, delta) * flux[k];
+                    first_[c * 3 + k] += s1;
+                }
+                second_[c] += glm::dvec3(s2[0], s2[1], s2[2]);
+            }
+        }
+    }
+
+    bool any(uint32_t node) const { return nodes_[node].any != 0; }
+
+    // Σ Φ·w over the photons accepted by `node` and its ancestors, w the kernel relative to uniform (as in
+    // kernel_weight) at the sample position x; per colour channel.
+    glm::dvec3 weighted_power(uint32_t node, const glm::vec3& x, double radius) const {
+        const glm::dvec3& flux = nodes_[node].flux;
+        if (!moments_) return flux;
+        const glm::dvec3 q = glm::dvec3(x) - centres_[node];
+        const double inv_r2 = 1.0 / (radius * radius);
+        const double outer = 1.0 - glm::dot(q, q) * inv_r2;
+        glm::dvec3 out;
+        for (int k = 0; k < 3; ++k)
+            out[k] = 2.0 * (outer * flux[k] + 2.0 * inv_r2 * glm::dot(q, first_[node * 3 + k]) -
+                            second_[node][k] * inv_r2);
+        return out;
+    }
+
+private:
+    struct Node {                      // one 32-byte line per node: an accept touches one place
+        glm::dvec3 flux{0.0};          // S0 = ΣΦ
+        uint32_t count = 0;            // photons accepted here
+        uint32_t any = 0;              // something was accepted here or above
+    };
+    bool moments_ = false;
+    std::vector<Node> nodes_;
+    std::vector<glm::dvec3> first_;    // Epanechnikov: S1, three per node (one per colour channel): ΣΦ_c·q
+    std::vector<glm::dvec3> second_;   // Epanechnikov: S2 = ΣΦ·|q|²
+    std::vector<glm::dvec3> centres_;  // Epanechnikov: box centres, in double
+};
+
+template <bool kCones>
 class ClusterSplat {
 public:
     ClusterSplat(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons,
@@ -133,6 +276,36 @@ public:
         reject_distance_sq_ = (r * r) * (1.0f + 1e-5f);
         budget_ = pair_budget(params.max_pairs_in_memory, hierarchy.leaves.size(),
                               size_t(tbb::this_task_arena::max_concurrency()));
+        if constexpr (kCones) {
+            // Accept margins on |x − p|² (see the top of the file): uniform 1e-5 against rounding; Epanechnikov
+            // keeps every accepted weight >= 0.1. A kernel added later gets no accept until it is made exact.
+            if (params.kernel == Kernel::uniform) {
+                accept_distance_sq_ = (r * r) * (1.0f - 1e-5f);
+            } else if (params.kernel == Kernel::epanechnikov) {
+                accept_distance_sq_ = (r * r) * 0.95f;
+            } else {
+                accept_distance_sq_ = -1.0f;
+            }
+            accepted_.init(hierarchy, params.kernel != Kernel::uniform);
+            cone_nodes_.resize(hierarchy.nodes.size());
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, cone_nodes_.size(), 4096),
+                              [&](const tbb::blocked_range<size_t>& range) {
+                                  for (size_t i = range.begin(); i != range.end(); ++i) {
+                                      const ClusterNode& n = hierarchy.nodes[i];
+                                      const NormalCone& cone = hierarchy.cones[i];
+                                      ConeNode& c = cone_nodes_[i];
+                                      c.box_min = n.box_min;
+                                      c.box_max = n.box_max;
+                                      c.children = n.first_child | n.child_count << kConeNodeChildBits |
+                                                   (hierarchy.node_flags[i] == (kNodeDiffuseOnly | kNodeRegular)
+                                                        ? kConeNodeAcceptable
+                                                        : 0u);
+                                      c.axis = cone.axis;
+                                      c.cos_angle = cone.cos_angle;
+                                      c.sin_angle = cone.sin_angle;
+                                  }
+                              });
+        }
     }
 
     std::vector<glm::vec3> run() {
@@ -154,11 +327,25 @@ public:
         const std::chrono::duration<double> pipeline = std::chrono::steady_clock::now() - start;
         // The pipeline's time, less the batches it shaded on the way: traversal (overlapped with counting).
         stats_.seconds["splat_traverse"] += pipeline.count() - seconds_in_batches_;
+        if constexpr (kCones) {
+            StageTimer timer(stats_, "splat_shade");
+            accepted_samples_ = accepted_.accepted_samples(hierarchy_);
+            accepted_.push_down(hierarchy_);
+        }
         shade_batch(true);
 
         stats_.counters["photon_node_tests"] += double(node_tests_);
+        stats_.counters["node_rejects_distance"] += double(rejects_distance_);
         stats_.counters["photon_sample_tests"] += double(sample_tests_.load());
-        stats_.counters["contributing_pairs"] += double(contributing_.load());
+        stats_.counters["contributing_pairs"] += double(contributing_.load() + accepted_samples_);
+        if constexpr (kCones) {
+            stats_.counters["node_rejects_cone_facing"] += double(rejects_facing_);
+            stats_.counters["node_rejects_cone_orientation"] += double(rejects_orientation_);
+            stats_.counters["node_accepts"] += double(accepts_);
+            stats_.counters["accepted_samples"] += double(accepted_samples_);
+            stats_.bytes["accepted_flux"] = double(accepted_.bytes());
+            stats_.bytes["cone_traversal_nodes"] = double(cone_nodes_.capacity() * sizeof(ConeNode));
+        }
         stats_.counters["leaf_photon_pairs"] += double(total_pairs_);
         stats_.counters["splat_batches"] += double(batches_);
         stats_.bytes["leaf_photon_lists"] = double(meter_.peak());
@@ -200,17 +387,24 @@ private:
             control_.check();
             const glm::vec3& p = positions_[j];
             if (is_finite(p)) {  // else it can pass no per-sample test, and would visit every node
-                stack.push_back(hierarchy_.root);
-                while (!stack.empty()) {
-                    const uint32_t index = stack.back();
-                    stack.pop_back();
-                    const ClusterNode& node = hierarchy_.nodes[index];
-                    ++segment.node_tests;
-                    if (distance_sq_to_box(p, node) > reject_distance_sq_) continue;
-                    if (node.child_count == 0) {
-                        segment.leaves.push_back(index);
-                    } else {
-                        for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.first_child + c);
+                if constexpr (kCones) {
+                    walk_with_cones(p, photons_[j], segment, stack);
+                } else {
+                    stack.push_back(hierarchy_.root);
+                    while (!stack.empty()) {
+                        const uint32_t index = stack.back();
+                        stack.pop_back();
+                        const ClusterNode& node = hierarchy_.nodes[index];
+                        ++segment.node_tests;
+                        if (distance_sq_to_box(p, node) > reject_distance_sq_) {
+                            ++segment.rejects_distance;
+                            continue;
+                        }
+                        if (node.child_count == 0) {
+                            segment.leaves.push_back(index);
+                        } else {
+                            for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.first_child + c);
+                        }
                     }
                 }
             }
@@ -218,6 +412,76 @@ private:
             segment.end = j + 1;
         }
         meter_.add(int64_t(segment.bytes()) - int64_t(before));
+    }
+
+    // One photon's walk with the cone tests (cone_tests in hierarchy.h). Children are tested together when their
+    // parent is opened: they lie side by side (ConeNode), and their lines are prefetched as the parent is pushed.
+    // The walk is bound by fetching nodes and by mispredicted branches, so the tests are combined into one
+    // branch per outcome, and the counters are kept in registers. The stack holds nodes tested, to be opened.
+    void walk_with_cones(const glm::vec3& p, const Photon& photon, Segment& segment, std::vector<uint32_t>& stack) {
+        using namespace cone_tests;
+        const PhotonCone pc = photon_cone(photon.wi, photon.normal, params_.cos_normal_tolerance);
+        const float reject_d2 = reject_distance_sq_, accept_d2 = accept_distance_sq_;
+        const float kappa = params_.plane_distance_factor;
+        const ConeNode* nodes = cone_nodes_.data();
+        std::vector<uint32_t>& out = segment.leaves;
+        uint64_t tests = 0, far = 0, facing_away = 0, misoriented_count = 0, accepts = 0;
+        stack.clear();
+        // A node whose cone passed A2 and A3 passes them for every sample below it: its children skip the cone
+        // tests (no R2 or R3 can hold there either). Stack entries carry that in kConesPassed.
+        constexpr uint32_t kConesPassed = 0x80000000u;
+        uint32_t first = hierarchy_.root, end = hierarchy_.root + 1;
+        bool passed = false;  // the cones of [first, end) are known to pass
+        for (;;) {
+            tests += end - first;
+            for (uint32_t index = first; index != end; ++index) {
+                const ConeNode& node = nodes[index];
+                if (distance_sq_to_box(p, node.box_min, node.box_max) > reject_d2) {
+                    ++far;
+                    continue;
+                }
+                const NormalCone cone = node.cone();
+                bool cones_pass = passed;
+                if (!passed) {
+                    const bool r2 = faces_away(cone, pc), r3 = misoriented(cone, pc);
+                    if (r2 | r3) {
+                        facing_away += r2;
+                        misoriented_count += !r2;
+                        continue;
+                    }
+                    cones_pass = faces_photon(cone, pc) & oriented(cone, pc);
+                }
+                const float max_d2 = max_distance_sq(p, node.box_min, node.box_max);
+                bool accept = (max_d2 < accept_d2) & node.acceptable() & cones_pass;
+                if (kappa > 0.0f && accept)
+                    accept = plane_test_passes(p, node.box_min, node.box_max, cone, max_d2, params_.radius, kappa);
+                if (accept) {
+                    out.push_back(index | kAcceptBit);
+                    ++accepts;
+                } else if (node.child_count() == 0) {
+                    out.push_back(index);
+                } else {
+                    // Opened soon (the stack is LIFO): start fetching its children now.
+                    const uintptr_t from = reinterpret_cast<uintptr_t>(nodes + node.first_child());
+                    const uintptr_t to = reinterpret_cast<uintptr_t>(nodes + node.first_child() + node.child_count());
+                    for (uintptr_t line = from & ~uintptr_t(63); line < to; line += 64)
+                        __builtin_prefetch(reinterpret_cast<const void*>(line));
+                    stack.push_back(index | (cones_pass ? kConesPassed : 0u));
+                }
+            }
+            if (stack.empty()) break;
+            const uint32_t entry = stack.back();
+            stack.pop_back();
+            const ConeNode& open = nodes[entry & ~kConesPassed];
+            passed = (entry & kConesPassed) != 0;
+            first = open.first_child();
+            end = first + open.child_count();
+        }
+        segment.node_tests += tests;
+        segment.rejects_distance += far;
+        segment.rejects_facing += facing_away;
+        segment.rejects_orientation += misoriented_count;
+        segment.accepts += accepts;
     }
 
     // The pipeline's tokens are Segment pointers into segments_, which owns them: TBB does not destroy the tokens
@@ -266,15 +530,41 @@ private:
     }
 
     void add_to_batch(Segment& segment) {
-        const size_t pairs = segment.leaves.size();
-        if (batch_pairs_ > 0 && batch_pairs_ + pairs > budget_.batch_pairs) {
+        // The budget counts every entry the segment's buffers hold (accepts too, until the batch releases them).
+        const size_t entries = segment.leaves.size();
+        if (batch_entries_ > 0 && batch_entries_ + entries > budget_.batch_pairs) {
             const auto start = std::chrono::steady_clock::now();
             shade_batch(false);
             const std::chrono::duration<double> d = std::chrono::steady_clock::now() - start;
             seconds_in_batches_ += d.count();
         }
-        for (const uint32_t leaf : segment.leaves) ++offsets_[leaf + 2];
+        if constexpr (kCones) {
+            // Photon order: accepts go to their node's accumulator now, leaf pairs are kept, compacted in place.
+            size_t kept = 0, k = 0;
+            for (uint32_t j = segment.begin; j != segment.end; ++j) {
+                uint32_t& end = segment.ends[j - segment.begin];
+                for (; k != end; ++k) {
+                    const uint32_t entry = segment.leaves[k];
+                    if (entry & kAcceptBit) {
+                        accepted_.add(entry & ~kAcceptBit, positions_[j], photons_[j]);
+                    } else {
+                        segment.leaves[kept++] = entry;
+                        ++offsets_[entry + 2];
+                    }
+                }
+                end = uint32_t(kept);
+            }
+            segment.leaves.resize(kept);  // keeps the capacity, which the meter still counts
+            rejects_facing_ += segment.rejects_facing;
+            rejects_orientation_ += segment.rejects_orientation;
+            accepts_ += segment.accepts;
+        } else {
+            for (const uint32_t leaf : segment.leaves) ++offsets_[leaf + 2];
+        }
+        const size_t pairs = segment.leaves.size();
         node_tests_ += segment.node_tests;
+        rejects_distance_ += segment.rejects_distance;
+        batch_entries_ += entries;
         batch_pairs_ += pairs;
         total_pairs_ += pairs;
         batch_.push_back(std::move(segment));  // moves the buffers out of the pipeline's token
@@ -316,11 +606,13 @@ private:
         }
         std::fill(offsets_.begin(), offsets_.end(), size_t(0));
         batch_pairs_ = 0;
+        batch_entries_ = 0;
         ++batches_;
     }
 
     void shade_leaves(const tbb::blocked_range<size_t>& range, bool last) {
         const bool carried = !sums_.empty();
+        [[maybe_unused]] const double r = params_.radius;
         uint64_t tests = 0, contributing = 0;
         for (size_t l = range.begin(); l != range.end(); ++l) {
             const uint32_t leaf = hierarchy_.leaves[l];
@@ -334,6 +626,7 @@ private:
                     control_.advance(positions_.size() + shaded, positions_.size() + hierarchy_.leaves.size());
             }
             const ClusterNode& node = hierarchy_.nodes[leaf];
+            [[maybe_unused]] const bool accepted_here = kCones && last && accepted_.any(leaf);
             for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                 const uint32_t i = hierarchy_.sample_order[k];
                 const ViewSample& s = views_[i];
@@ -341,8 +634,13 @@ private:
                 for (size_t m = 0; m != list_size; ++m) {
                     const uint32_t j = list[m];
                     if (!photon_reaches_sample(s, positions_[j], photons_[j], params_)) continue;
-                    reflected_flux += photon_reflected_flux(s, photons_[j]);
+                    reflected_flux += photon_reflected_flux(s, positions_[j], photons_[j], params_);
                     ++contributing;
+                }
+                if constexpr (kCones) {
+                    // The photons accepted by the leaf or its ancestors: all diffuse-only here, f = ρ/π for any ωi.
+                    if (last && accepted_here)
+                        reflected_flux += sample_brdf(s, s.normal) * accepted_.weighted_power(leaf, s.position, r);
                 }
                 if (last)
                     radiance_[i] = finish_sample(s, reflected_flux, params_);
@@ -363,6 +661,7 @@ private:
     Stats& stats_;
     const std::vector<glm::vec3> positions_;
     float reject_distance_sq_ = 0.0f;
+    float accept_distance_sq_ = -1.0f;  // cluster_cone: accept a node only when its farthest point is nearer
     PairBudget budget_;
 
     size_t next_photon_ = 0;                      // input stage
@@ -373,23 +672,27 @@ private:
     std::vector<Segment*> free_segments_;
 
     std::vector<Segment> batch_;    // output stage: the pairs of the batch, photons ascending
-    size_t batch_pairs_ = 0;
+    size_t batch_pairs_ = 0;        // leaf pairs: what the lists will hold
+    size_t batch_entries_ = 0;      // every entry the batch's segment buffers held, accepts included
     std::vector<size_t> offsets_;   // pair counts per leaf while filling, then the lists' CSR offsets
     std::vector<uint32_t> list_;    // the batch's per-leaf photon lists
     std::vector<glm::dvec3> sums_;  // per position in sample_order: Σ f_r·Φ so far; empty while one batch
     std::vector<glm::vec3> radiance_;
 
+    AcceptedFlux accepted_;             // cluster_cone only
+    std::vector<ConeNode> cone_nodes_;  // cluster_cone only
+
     ByteMeter meter_;
-    uint64_t node_tests_ = 0, total_pairs_ = 0, batches_ = 0;
+    uint64_t node_tests_ = 0, total_pairs_ = 0, batches_ = 0, rejects_distance_ = 0;
+    uint64_t rejects_facing_ = 0, rejects_orientation_ = 0, accepts_ = 0, accepted_samples_ = 0;
     std::atomic<uint64_t> sample_tests_{0}, contributing_{0};
     double seconds_in_batches_ = 0.0;
 };
 
-}  // namespace
-
-std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
-                                     const PhotonMap& photons, const SplatParams& params,
-                                     const RenderControl& control, Stats& stats) {
+// What both entry points check and report before splatting; false when there is nothing to splat.
+bool prepare(const char* method, const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+             const PhotonMap& photons, const SplatParams& params, const RenderControl& control, Stats& stats,
+             bool cones) {
     validate(params, photons);
     const std::vector<ViewSample>& views = samples.samples;
     if (hierarchy.sample_order.size() != views.size())
@@ -398,16 +701,46 @@ std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const Vi
                                                     " were given");
     if (photons.photons.size() >= std::numeric_limits<uint32_t>::max())
         throw InvalidInput("photons", "too many photons for 32-bit photon indices");
+    if (cones && !hierarchy.empty() && !hierarchy.has_cones())
+        throw InvalidInput("cluster hierarchy", std::string("built without normal cones, which the ") + method +
+                                                    " method needs (ClusterBuildOptions::normal_cones)");
+    if (cones && hierarchy.nodes.size() > (size_t(1) << kConeNodeChildBits))
+        throw InvalidInput("cluster hierarchy", "too many nodes for the " + std::string(method) + " method");
     control.check();
     stats.bytes["hierarchy"] = double(hierarchy.bytes());
-    for (const char* name : {"photon_node_tests", "photon_sample_tests", "contributing_pairs", "leaf_photon_pairs",
-                             "splat_batches"})
+    for (const char* name : {"photon_node_tests", "node_rejects_distance", "photon_sample_tests",
+                             "contributing_pairs", "leaf_photon_pairs", "splat_batches"})
         stats.counters[name] += 0.0;  // present even when there is nothing to splat
+    if (cones) {
+        stats.bytes["cones"] = double(hierarchy.cone_bytes());
+        for (const char* name : {"node_rejects_cone_facing", "node_rejects_cone_orientation", "node_accepts",
+                                 "accepted_samples"})
+            stats.counters[name] += 0.0;
+    }
     if (hierarchy.empty() || photons.photons.empty()) {
         stats.bytes["leaf_photon_lists"] = 0.0;
-        return std::vector<glm::vec3>(views.size(), glm::vec3(0.0f));  // (emitted may be 0: nothing to finish)
+        if (cones) stats.bytes["accepted_flux"] = 0.0;
+        return false;
     }
-    return ClusterSplat(hierarchy, samples, photons, params, control, stats).run();
+    return true;
+}
+
+}  // namespace
+
+std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                     const PhotonMap& photons, const SplatParams& params,
+                                     const RenderControl& control, Stats& stats) {
+    if (!prepare("cluster", hierarchy, samples, photons, params, control, stats, false))
+        return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
+    return ClusterSplat<false>(hierarchy, samples, photons, params, control, stats).run();
+}
+
+std::vector<glm::vec3> splat_cluster_cone(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                          const PhotonMap& photons, const SplatParams& params,
+                                          const RenderControl& control, Stats& stats) {
+    if (!prepare("cluster_cone", hierarchy, samples, photons, params, control, stats, true))
+        return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
+    return ClusterSplat<true>(hierarchy, samples, photons, params, control, stats).run();
 }
 
 }  // namespace ps

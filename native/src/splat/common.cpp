@@ -15,7 +15,11 @@ struct MethodName {
 };
 constexpr MethodName kMethodNames[] = {
     {SplatMethod::brute, "brute"},
+    {SplatMethod::tiled, "tiled"},
     {SplatMethod::cluster, "cluster"},
+    {SplatMethod::cluster_cone, "cluster_cone"},
+    {SplatMethod::directional, "directional"},
+    {SplatMethod::gather, "gather"},
 };
 
 }  // namespace
@@ -35,12 +39,28 @@ SplatMethod splat_method_from_string(const std::string& name) {
     throw InvalidInput("splat method", "'" + name + "' is not one of: " + known);
 }
 
+std::vector<std::string> splat_method_names() {
+    std::vector<std::string> names;
+    for (const MethodName& m : kMethodNames) names.emplace_back(m.name);
+    return names;
+}
+
+const char* to_string(Kernel kernel) { return kernel == Kernel::uniform ? "uniform" : "epanechnikov"; }
+
+Kernel kernel_from_string(const std::string& name) {
+    if (name == "uniform") return Kernel::uniform;
+    if (name == "epanechnikov") return Kernel::epanechnikov;
+    throw InvalidInput("kernel", "'" + name + "' is not one of: uniform, epanechnikov");
+}
+
 void validate(const SplatParams& params, const PhotonMap& photons) {
     if (!(params.radius > 0.0f) || !std::isfinite(params.radius))
         throw InvalidInput("radius", std::to_string(params.radius) + " is not a positive finite number");
     if (!photons.photons.empty() && params.emitted == 0)
         throw InvalidInput("emitted", "0 emitted photons, but " + std::to_string(photons.photons.size()) +
                                           " stored: the estimate would divide by zero");
+    if (params.directional_level < -1 || params.directional_level > 64)
+        throw InvalidInput("directional_level", std::to_string(params.directional_level) + " is not in [-1, 64]");
     if (params.max_pairs_in_memory == 0)
         throw InvalidInput("max_pairs_in_memory", "0 leaves no room for a single (leaf, photon) pair; use >= 1");
 }

@@ -1,0 +1,176 @@
+"""Writes glossy_row.blend next to this script: five metal spheres of increasing roughness in a row.
+
+  - five spheres (radius 0.4 m) of a gold-tinted metal, Glossy BSDF (GGX) with roughness 0.05, 0.2, 0.35, 0.5
+    and 0.8 from left to right;
+  - a diffuse grey floor and a warm back wall behind them;
+  - lit by a small square area light above and in front of the row and a point light to the left, so that each
+    sphere shows both lights as highlights whose size and softness follow its roughness.
+
+Run:  blender -b --factory-startup --python blend_scenes/make_glossy_row.py
+
+The spheres use plain Glossy BSDF nodes with the Roughness input set, the way an artist makes a brushed metal:
+an engine without rough glossy surfaces may render them as mirrors (and say so), one with them renders the row as
+Cycles does. Units are metres: the spheres stand on the floor (z = 0) along X at y = 0, the back wall is at
+y = 1.5 and the camera looks along +Y. The file opens in Cycles (CPU, view transform Standard, 1280x720).
+"""
+
+import math
+from pathlib import Path
+
+import bpy
+from mathutils import Vector
+
+HERE = Path(__file__).resolve().parent
+
+ROUGHNESS = (0.05, 0.2, 0.35, 0.5, 0.8)
+SPHERE_RADIUS = 0.4
+SPHERE_SPACING = 1.1
+METAL = (0.95, 0.72, 0.42)          # gold-like tint (scene-linear reflectance)
+FLOOR = (0.45, 0.45, 0.45)
+WALL = (0.62, 0.55, 0.46)
+WALL_Y = 1.5
+
+AREA_POWER = 110.0                  # watts (Cycles units)
+AREA_SIZE = 0.4                     # metres, square
+AREA_LOCATION = (0.6, -2.4, 2.8)
+POINT_POWER = 200.0
+POINT_RADIUS = 0.05
+POINT_LOCATION = (-3.2, -1.2, 2.2)
+WORLD = (0.08, 0.08, 0.08)          # a faint uniform fill, so the spheres' upper halves are not black
+
+CAMERA_LOCATION = (0.0, -6.0, 1.1)
+CAMERA_TARGET = (0.0, 0.0, 0.55)
+CAMERA_LENS = 34.0                  # mm on a 36 mm sensor
+
+
+def new_empty_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = 'CYCLES'
+    scene.render.resolution_x = 1280
+    scene.render.resolution_y = 720
+    scene.render.resolution_percentage = 100
+    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.look = 'None'
+    scene.cycles.device = 'CPU'
+    scene.cycles.samples = 128
+    scene.cycles.use_denoising = False          # Debian's Blender has no OpenImageDenoise
+    world = bpy.data.worlds.new("Fill")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (*WORLD, 1.0)
+    world.color = WORLD
+    scene.world = world
+    return scene
+
+
+def diffuse_material(name, color):
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes = material.node_tree.nodes
+    nodes.clear()
+    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
+    bsdf.inputs["Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.0      # Lambertian
+    output = nodes.new("ShaderNodeOutputMaterial")
+    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
+    material.diffuse_color = (*color, 1.0)
+    return material
+
+
+def glossy_material(name, color, roughness):
+    """A metal as a plain Glossy BSDF node: GGX distribution, Roughness input set."""
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    nodes = material.node_tree.nodes
+    nodes.clear()
+    bsdf = nodes.new("ShaderNodeBsdfGlossy")
+    bsdf.distribution = 'GGX'
+    bsdf.inputs["Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Roughness"].default_value = roughness
+    output = nodes.new("ShaderNodeOutputMaterial")
+    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
+    material.diffuse_color = (*color, 1.0)
+    material.metallic = 1.0
+    material.roughness = roughness
+    return material
+
+
+def add_room(scene):
+    """Floor (8 m x 6 m) and back wall as one mesh, two material slots."""
+    v = [(-4.0, -4.5, 0.0), (4.0, -4.5, 0.0), (4.0, WALL_Y, 0.0), (-4.0, WALL_Y, 0.0),
+         (-4.0, WALL_Y, 3.5), (4.0, WALL_Y, 3.5)]
+    faces = [(0, 1, 2, 3), (3, 2, 5, 4)]           # floor facing +Z, wall facing -Y
+    mesh = bpy.data.meshes.new("Room")
+    mesh.from_pydata(v, [], faces)
+    mesh.materials.append(diffuse_material("Floor", FLOOR))
+    mesh.materials.append(diffuse_material("Wall", WALL))
+    mesh.polygons.foreach_set("material_index", [0, 1])
+    mesh.update()
+    obj = bpy.data.objects.new("Room", mesh)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def add_spheres(scene):
+    first = -SPHERE_SPACING * (len(ROUGHNESS) - 1) / 2.0
+    for k, roughness in enumerate(ROUGHNESS):
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=SPHERE_RADIUS,
+                                             location=(first + k * SPHERE_SPACING, 0.0, SPHERE_RADIUS))
+        obj = bpy.context.active_object
+        obj.name = obj.data.name = f"Sphere{k + 1}_r{roughness:.2f}"
+        obj.data.polygons.foreach_set("use_smooth", [True] * len(obj.data.polygons))
+        obj.data.materials.append(glossy_material(f"Metal_r{roughness:.2f}", METAL, roughness))
+
+
+def add_lights(scene):
+    area = bpy.data.lights.new("AreaLight", type='AREA')
+    area.shape = 'SQUARE'
+    area.size = AREA_SIZE
+    area.energy = AREA_POWER
+    area_obj = bpy.data.objects.new("AreaLight", area)
+    area_obj.location = AREA_LOCATION
+    # Shine (local -Z) at the middle of the row.
+    aim = Vector(CAMERA_TARGET) - Vector(AREA_LOCATION)
+    area_obj.rotation_euler = aim.to_track_quat('-Z', 'Y').to_euler()
+    point = bpy.data.lights.new("PointLight", type='POINT')
+    point.energy = POINT_POWER
+    point.shadow_soft_size = POINT_RADIUS
+    point_obj = bpy.data.objects.new("PointLight", point)
+    point_obj.location = POINT_LOCATION
+    for obj in (area_obj, point_obj):
+        # Photon Splat never shows lights to the camera; Cycles is told the same. Reflections still show them.
+        obj.visible_camera = False
+        scene.collection.objects.link(obj)
+
+
+def add_camera(scene):
+    camera = bpy.data.cameras.new("Camera")
+    camera.lens = CAMERA_LENS
+    camera.sensor_width = 36.0
+    camera.sensor_fit = 'AUTO'
+    obj = bpy.data.objects.new("Camera", camera)
+    obj.location = CAMERA_LOCATION
+    obj.rotation_euler = (Vector(CAMERA_TARGET) - Vector(CAMERA_LOCATION)).to_track_quat('-Z', 'Y').to_euler()
+    scene.collection.objects.link(obj)
+    scene.camera = obj
+    return obj
+
+
+def save(name):
+    path = HERE / name
+    bpy.context.preferences.filepaths.save_version = 0      # no .blend1 backup next to the committed file
+    bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True)
+    print(f"wrote {path}")
+
+
+def make_glossy_row():
+    scene = new_empty_scene()
+    add_room(scene)
+    add_spheres(scene)
+    add_lights(scene)
+    add_camera(scene)
+    save("glossy_row.blend")
+
+
+if __name__ == "__main__":
+    make_glossy_row()

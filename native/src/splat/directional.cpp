@@ -1,0 +1,688 @@
+// The approximate "directional" splat of Moreau et al. 2016: "photon traversal is stopped at a fixed level of
+// our hierarchy, and the incoming radiance is accumulated per node and direction, rather than per view sample."
+//
+// 1. Cut. Levels are counted from the leaves by HEIGHT (a leaf has height 0, a node 1 + its children's largest).
+//    The nodes of level L are the cut: every node of height <= L whose parent has height > L (or the root). Along
+//    any leaf-to-root path heights strictly increase, so each leaf, hence each sample, lies under exactly one cut
+//    node; a leaf whose parent is already above L (single-child chains are collapsed) is its own cut node.
+//    L = params.directional_level (clamped to the root's height), or, for -1, the highest level whose median
+//    node diagonal (the node holding the median sample) is still <= r: nodes about as large as the kernel, so
+//    that a node's samples lie within about r/2 of its centroid. When even the leaves are more than 2r across,
+//    that resolution is gone (dossier §7 item 12: a radius shrinking pass after pass would converge to blocks),
+//    and the automatic level falls back to the exact cluster splat.
+// 2. Facets. A cut node whose normals spread by more than kSplitAngle (a tile across a corner, a silhouette) is
+//    split by orientation into two facets (two seeds, then one k-means step on the normals); any other node is
+//    one facet. A facet has its sample centroid, its normal cone, and its own bins: without the split, a corner
+//    node's centroid floats off both walls and its bins mix the photons of both, which the exact method keeps
+//    apart with its n_x·n_p test. A sample belongs to the facet whose axis is closest to its normal.
+// 3. Traverse. Each photon walks down to the cut only, rejecting nodes above it by sphere-vs-box as `cluster`
+//    does. At a cut node it is deposited into each facet whose centroid is within r, with weight
+//    w = kernel_weight(centroid − p), unless the facet's normal cone shows that none of its samples could accept
+//    it: all facing away from ωi, all turned from the photon's normal by more than τ, or (κ > 0) all too far from
+//    the photon's plane.
+// 4. Bins. 8 bins on the hemisphere of the facet's axis: 4 azimuth quadrants × 2 elevation bands split at 60°
+//    (equal solid angles); ωi below the horizon, which only a wide cone lets through, go to the outer band. A
+//    planar facet thereby uses all 8 bins, where world octants would leave half of them empty (4 quadrants of one
+//    hemisphere): twice the angular resolution for glossy receivers. A bin holds Σ w·Φ (RGB) and
+//    Σ w·mean(Φ)·ωi, whose direction is the bin's flux-weighted mean direction ω̄.
+// 5. Shade. A sample x of facet f, in cut node n with parent P, is shaded from f's bins blended with P's:
+//      L(x) = finish_sample( (1 − β)·Σ_b [n_x·ω̄_b > 0]·f_r(x, ω̄_b)·F_b + β·(the same over P's bins) ),
+//    f_r = sample_brdf(x, ω̄_b), so glossy receivers see each bin from its mean direction. P's bins are the
+//    sample-weighted mean of the bins of the facets under P that face like f (axes within τ):
+//    Σ m_g·F_g / Σ m_g, re-binned by the world octant of each ω̄. That is P's estimate over its larger region
+//    on the scale of a single node (P's raw sum would count every child's disc), without the other wall of a
+//    corner. β grows linearly from 0 at f's centroid to kMaxParentBlend at its farthest sample, so that on both
+//    sides of an edge between siblings the estimate leans towards the same parent value, which halves the jump
+//    there. A parent much larger than its child (a collapsed chain) is no neighbourhood: then β = 0.
+//    Normalisation: none is needed. A facet's centroid is a convex combination of its samples, so for a planar
+//    facet it lies on the plane, and Σ w·Φ over a photon density ρ there is ρ·Φ·∫_disc w = ρ·Φ·π r² for both
+//    kernels (kernel_weight is relative to the uniform kernel), which finish_sample's 1/(π r² N) turns into what
+//    brute gives on average. A curved facet has its centroid a little off the surface and reads a little low:
+//    that is part of the approximation, measured against brute in the tests.
+//
+// Determinism: deposits are summed as 64-bit fixed-point integers, first per task, then into the shared bins
+// with atomic adds. Each contribution is rounded on its own and integer addition is exact, so the sums, and the
+// image, are the same bit for bit whatever the thread count and the order photons are taken in. The unit makes
+// 2^61 steps = N_photons × the largest contribution, so no sum can overflow; a step is about 4e-19·N of a
+// photon's contribution, far below float precision. Photons are traversed in Morton order of their position
+// (which changes no sum): neighbouring photons meet the same nodes, which keeps both in cache and makes a task's
+// deposits gather on few nodes, hence few atomic adds.
+//
+// Counters: "photon_node_tests" (box tests above the cut and facet tests at it), "node_deposits" (photon
+// deposits into a facet's bin), "photon_sample_tests" = 0 (no photon is ever tested against a sample),
+// "bin_evaluations" (bins shaded, own and parent's, summed over samples), "contributing_pairs" = Σ over deposits
+// of the facet's sample count (the photon–sample pairs the deposits hand flux to, whether or not a sample's
+// facing test then takes that bin), "directional_cut_nodes", "directional_facets". Values: "directional_level"
+// (the level used; -1 when the exact splat was used), "directional_exact_fallback" (1 then).
+// Bytes: "direction_bins" (8 bins × 6 int64 per facet), "directional_nodes" (facets, cut and tree bookkeeping).
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "photonsplat/errors.h"
+#include "photonsplat/hierarchy.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/splat.h"
+#include "photonsplat/stats.h"
+#include "photonsplat/validation.h"
+
+namespace ps {
+namespace {
+
+constexpr int kBins = 8;
+constexpr int kSlots = 6;  // per bin: Σ w·Φ (R, G, B), then Σ w·mean(Φ)·ωi (x, y, z)
+constexpr int kBinValues = kBins * kSlots;
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+constexpr size_t kPhotonsPerTask = 2048;         // spatially sorted: a task's deposits share nodes
+constexpr size_t kCutNodesPerTask = 16;
+constexpr double kMaxParentBlend = 0.5;          // β at a facet's farthest sample
+constexpr double kParentSpan = 4.0;              // blend with P only if diag(P) <= this × max(diag(n), r)
+constexpr size_t kMaxParentFacets = 256;         // and only if P holds at most this many facets
+constexpr double kFallbackLeafDiagonal = 2.0;    // auto level: exact splat when median leaf diagonal > this × r
+constexpr double kFixedPointRange = 2305843009213693952.0;  // 2^61
+constexpr float kPi = 3.14159265358979f;
+constexpr float kSplitAngle = 20.0f * kPi / 180.0f;  // split a cut node whose normals spread wider than this
+constexpr float kConeInflation = 1e-4f;          // rad, as the hierarchy inflates its cones
+constexpr float kNever = -2.0f;                  // a cosine threshold no dot product of unit vectors reaches
+
+// ---- the cut ------------------------------------------------------------------------------------------------
+
+// Parent links and heights, derived from the children ranges in O(nodes).
+struct TreeShape {
+    std::vector<uint32_t> parent;  // kNone for the root
+    std::vector<int> height;       // 0 for leaves
+    std::vector<uint32_t> order;   // the nodes reachable from the root, every parent before its children
+};
+
+TreeShape tree_shape(const ClusterHierarchy& hierarchy) {
+    TreeShape t;
+    t.parent.assign(hierarchy.nodes.size(), kNone);
+    t.height.assign(hierarchy.nodes.size(), 0);
+    t.order.reserve(hierarchy.nodes.size());
+    t.order.push_back(hierarchy.root);
+    for (size_t i = 0; i < t.order.size(); ++i) {
+        const ClusterNode& node = hierarchy.nodes[t.order[i]];
+        for (uint32_t c = 0; c < node.child_count; ++c) {
+            t.parent[node.first_child + c] = t.order[i];
+            t.order.push_back(node.first_child + c);
+        }
+    }
+    for (size_t i = t.order.size(); i-- > 1;) {
+        const uint32_t child = t.order[i];
+        int& h = t.height[t.parent[child]];
+        h = std::max(h, t.height[child] + 1);
+    }
+    return t;
+}
+
+bool in_cut(const TreeShape& t, uint32_t node, int level) {
+    return t.height[node] <= level && (t.parent[node] == kNone || t.height[t.parent[node]] > level);
+}
+
+double diagonal(const ClusterNode& node) {
+    const double d = glm::length(glm::dvec3(node.box_max) - glm::dvec3(node.box_min));
+    return std::isfinite(d) ? d : 0.0;
+}
+
+// The diagonal of the cut node that holds the median sample, for the cut of `level`.
+double median_diagonal(const ClusterHierarchy& hierarchy, const TreeShape& t, int level) {
+    std::vector<std::pair<double, uint32_t>> sizes;  // (diagonal, samples)
+    uint64_t total = 0;
+    for (const uint32_t n : t.order) {
+        if (!in_cut(t, n, level)) continue;
+        const ClusterNode& node = hierarchy.nodes[n];
+        sizes.emplace_back(diagonal(node), node.sample_end - node.sample_begin);
+        total += node.sample_end - node.sample_begin;
+    }
+    std::sort(sizes.begin(), sizes.end());
+    uint64_t seen = 0;
+    for (const auto& [d, m] : sizes)
+        if ((seen += m) * 2 >= total) return d;
+    return sizes.empty() ? 0.0 : sizes.back().first;
+}
+
+// The level to use, and whether the automatic level gives up for the exact splat.
+std::pair<int, bool> choose_level(const ClusterHierarchy& hierarchy, const TreeShape& t, const SplatParams& params) {
+    const int top = t.height[hierarchy.root];
+    if (params.directional_level >= 0) return {std::min(params.directional_level, top), false};
+    const double r = params.radius;
+    if (median_diagonal(hierarchy, t, 0) > kFallbackLeafDiagonal * r) return {0, true};
+    int level = 0;
+    while (level < top && median_diagonal(hierarchy, t, level + 1) <= r) ++level;
+    return {level, false};
+}
+
+// ---- facets -------------------------------------------------------------------------------------------------
+
+// The samples of one orientation in a cut node: what the traversal tests and what shading needs.
+struct Facet {
+    glm::vec3 centroid{std::numeric_limits<float>::quiet_NaN()};  // of its samples' positions
+    glm::vec3 axis{0.0f, 0.0f, 1.0f};  // its samples' mean geometric normal: the bins' pole
+    glm::vec3 tangent{1.0f, 0.0f, 0.0f}, bitangent{0.0f, 1.0f, 0.0f};
+    float facing_reject = kNever;  // every sample faces away from ωi when dot(axis, ωi) <= this
+    float normal_reject = kNever;  // every sample's normal is > τ from n_p when dot(axis, n_p) <= this
+    float plane_reject = std::numeric_limits<float>::infinity();  // |axis·(c − p)| >= this: all beyond κ·r
+    float reach = 0.0f;            // distance from the centroid to its farthest sample (for β)
+    uint32_t samples = 0;          // m: its samples with a finite position and normal
+};
+
+struct Cut {
+    uint32_t node = 0;
+    uint32_t first_facet = 0;
+    uint32_t facet_count = 0;  // 0 (no finite sample), 1 or 2
+    uint32_t parent = kNone;   // the parent node to blend with, or kNone
+};
+
+// An orthonormal frame around a unit vector (the branch-free construction of Duff et al. 2017).
+void frame_around(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+bool regular(const ViewSample& s) { return is_finite(s.position) && is_finite(s.normal); }
+
+// Which of a cut node's facets a sample belongs to: the one whose axis is closest to its normal.
+uint32_t facet_of(const ViewSample& s, const Facet* facets, uint32_t count) {
+    return count == 2 && glm::dot(s.normal, facets[1].axis) > glm::dot(s.normal, facets[0].axis) ? 1 : 0;
+}
+
+// Fills in a facet from its samples (those of `node` for which `member` holds), around a given axis.
+template <typename Member>
+void describe_facet(Facet& f, const ClusterHierarchy& hierarchy, const std::vector<ViewSample>& views,
+                    const ClusterNode& node, const SplatParams& params, Member member) {
+    glm::dvec3 position_sum(0.0);
+    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+        const ViewSample& s = views[hierarchy.sample_order[k]];
+        if (!member(s)) continue;
+        position_sum += glm::dvec3(s.position);
+        ++f.samples;
+    }
+    if (f.samples == 0) return;
+    const glm::dvec3 centroid = position_sum / double(f.samples);
+    const glm::dvec3 axis(f.axis);
+    f.centroid = glm::vec3(centroid);
+    frame_around(f.axis, f.tangent, f.bitangent);
+    double min_cos = 1.0, slab = 0.0, reach = 0.0;
+    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+        const ViewSample& s = views[hierarchy.sample_order[k]];
+        if (!member(s)) continue;
+        const glm::dvec3 d = glm::dvec3(s.position) - centroid;
+        const glm::dvec3 n(s.normal);
+        const double len = glm::length(n);
+        min_cos = std::min(min_cos, len > 0.0 ? glm::dot(axis, n) / len : -1.0);
+        slab = std::max(slab, std::fabs(glm::dot(axis, d)));
+        reach = std::max(reach, glm::length(d));
+    }
+    f.reach = float(reach);
+    const float theta = std::acos(float(std::clamp(min_cos, -1.0, 1.0))) + kConeInflation;
+    const float tau = std::acos(std::clamp(params.cos_normal_tolerance, -1.0f, 1.0f));
+    if (theta < 0.5f * kPi) f.facing_reject = -std::sin(theta);
+    if (theta + tau < kPi) f.normal_reject = std::cos(theta + tau);
+    if (params.plane_distance_factor > 0.0f && theta < kPi)
+        f.plane_reject = params.plane_distance_factor * params.radius + float(slab) +
+                         2.0f * std::sin(0.5f * theta) * params.radius;
+}
+
+// A cut node's facets: one, or two when its normals spread wider than kSplitAngle. Returns how many.
+uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<ViewSample>& views,
+                           const ClusterNode& node, const SplatParams& params, Facet* out) {
+    glm::dvec3 normal_sum(0.0);
+    uint32_t count = 0;
+    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+        const ViewSample& s = views[hierarchy.sample_order[k]];
+        if (regular(s)) normal_sum += glm::dvec3(s.normal), ++count;
+    }
+    if (count == 0) return 0;
+    const double length = glm::length(normal_sum);
+    const glm::vec3 mean = length > 1e-3 * count ? glm::vec3(normal_sum / length) : glm::vec3(0.0f, 0.0f, 1.0f);
+    // Seeds: the normal farthest from the mean, then the normal farthest from that one.
+    glm::vec3 seed0 = mean, seed1 = mean;
+    float lowest = 2.0f;
+    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+        const ViewSample& s = views[hierarchy.sample_order[k]];
+        if (regular(s) && glm::dot(mean, s.normal) < lowest) lowest = glm::dot(mean, s.normal), seed0 = s.normal;
+    }
+    const bool split = length <= 1e-3 * count || lowest < std::cos(kSplitAngle);
+    if (split) {
+        lowest = 2.0f;
+        for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+            const ViewSample& s = views[hierarchy.sample_order[k]];
+            if (regular(s) && glm::dot(seed0, s.normal) < lowest) lowest = glm::dot(seed0, s.normal), seed1 = s.normal;
+        }
+        // One k-means step: the axes are the mean normals of the samples closer to each seed.
+        glm::dvec3 sums[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+        for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+            const ViewSample& s = views[hierarchy.sample_order[k]];
+            if (regular(s)) sums[glm::dot(s.normal, seed1) > glm::dot(s.normal, seed0) ? 1 : 0] += glm::dvec3(s.normal);
+        }
+        const double l0 = glm::length(sums[0]), l1 = glm::length(sums[1]);
+        if (l0 > 0.0 && l1 > 0.0) {
+            out[0] = Facet();
+            out[1] = Facet();
+            out[0].axis = glm::vec3(sums[0] / l0);
+            out[1].axis = glm::vec3(sums[1] / l1);
+            for (uint32_t i = 0; i < 2; ++i)
+                describe_facet(out[i], hierarchy, views, node, params,
+                               [&](const ViewSample& s) { return regular(s) && facet_of(s, out, 2) == i; });
+            if (out[0].samples > 0 && out[1].samples > 0) return 2;
+        }
+    }
+    out[0] = Facet();
+    out[0].axis = mean;
+    describe_facet(out[0], hierarchy, views, node, params, regular);
+    if (length <= 1e-3 * count) {  // the normals cancel: a full cone, which never rejects
+        out[0].facing_reject = out[0].normal_reject = kNever;
+        out[0].plane_reject = std::numeric_limits<float>::infinity();
+    }
+    return 1;
+}
+
+int bin_of(const Facet& f, const glm::vec3& wi) {
+    const float x = glm::dot(f.tangent, wi), y = glm::dot(f.bitangent, wi), z = glm::dot(f.axis, wi);
+    return int(x > 0.0f) | int(y > 0.0f) << 1 | int(!(z >= 0.5f)) << 2;
+}
+
+int world_octant(const glm::dvec3& w) { return int(w.x > 0.0) | int(w.y > 0.0) << 1 | int(w.z > 0.0) << 2; }
+
+// A bin ready to shade with: its flux (in the units finish_sample expects) and its mean direction.
+struct ShadeBin {
+    glm::dvec3 flux;
+    glm::vec3 direction;
+};
+
+// The non-empty bins of `values` (kBinValues doubles), flux × scale.
+int shade_bins(const double* values, double scale, ShadeBin* out) {
+    int count = 0;
+    for (int b = 0; b < kBins; ++b, values += kSlots) {
+        const glm::dvec3 flux(values[0], values[1], values[2]);
+        const glm::dvec3 d(values[3], values[4], values[5]);
+        const double len = glm::length(d);
+        if (flux == glm::dvec3(0.0) || !(len > 0.0)) continue;  // no flux, or no direction to shade it from
+        out[count++] = {flux * scale, glm::vec3(d / len)};
+    }
+    return count;
+}
+
+glm::dvec3 reflect_bins(const ViewSample& s, const ShadeBin* bins, int count) {
+    glm::dvec3 sum(0.0);
+    for (int b = 0; b < count; ++b)
+        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, bins[b].direction) * bins[b].flux;
+    return sum;
+}
+
+// ---- the splat ----------------------------------------------------------------------------------------------
+
+class DirectionalSplat {
+public:
+    DirectionalSplat(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons,
+                     const SplatParams& params, const RenderControl& control, Stats& stats, TreeShape shape,
+                     int level)
+        : hierarchy_(hierarchy),
+          views_(samples.samples),
+          photons_(photons.photons),
+          params_(params),
+          control_(control),
+          stats_(stats),
+          shape_(std::move(shape)),
+          level_(level),
+          positions_(relative_photon_positions(photons, samples.origin)),
+          radiance_(views_.size(), glm::vec3(0.0f)) {}
+
+    std::vector<glm::vec3> run() {
+        {
+            StageTimer timer(stats_, "splat_setup");
+            build_cut();
+            choose_fixed_point_unit();
+        }
+        control_.check();
+        {
+            StageTimer timer(stats_, "splat_traverse");
+            if (unit_ > 0.0) traverse();
+        }
+        control_.check();
+        {
+            StageTimer timer(stats_, "splat_shade");
+            shade();
+        }
+        stats_.counters["photon_node_tests"] += double(node_tests_.load());
+        stats_.counters["node_deposits"] += double(deposits_.load());
+        stats_.counters["contributing_pairs"] += double(pairs_.load());
+        stats_.counters["bin_evaluations"] += double(bin_evaluations_.load());
+        stats_.counters["directional_cut_nodes"] += double(cuts_.size());
+        stats_.counters["directional_facets"] += double(facets_.size());
+        stats_.bytes["direction_bins"] = double(bins_.capacity() * sizeof(std::atomic<int64_t>));
+        stats_.bytes["directional_nodes"] =
+            double(facets_.capacity() * sizeof(Facet) + cuts_.capacity() * sizeof(Cut) +
+                   cut_of_.capacity() * sizeof(uint32_t) + shape_.parent.capacity() * sizeof(uint32_t) +
+                   shape_.height.capacity() * sizeof(int) + shape_.order.capacity() * sizeof(uint32_t));
+        return std::move(radiance_);
+    }
+
+private:
+    void build_cut() {
+        for (const uint32_t n : shape_.order)
+            if (in_cut(shape_, n, level_)) cuts_.emplace_back().node = n;
+        // In sample order: the cut nodes under any node are then one run of cuts_ (see parent_facets).
+        std::sort(cuts_.begin(), cuts_.end(), [&](const Cut& a, const Cut& b) {
+            return hierarchy_.nodes[a.node].sample_begin < hierarchy_.nodes[b.node].sample_begin;
+        });
+        cut_of_.assign(hierarchy_.nodes.size(), kNone);
+        for (size_t c = 0; c < cuts_.size(); ++c) cut_of_[cuts_[c].node] = uint32_t(c);
+        std::vector<Facet> pairs(2 * cuts_.size());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c)
+                cuts_[c].facet_count =
+                    describe_cut_node(hierarchy_, views_, hierarchy_.nodes[cuts_[c].node], params_, &pairs[2 * c]);
+        });
+        facets_.reserve(cuts_.size() + cuts_.size() / 8);
+        for (size_t c = 0; c < cuts_.size(); ++c) {
+            Cut& cut = cuts_[c];
+            cut.first_facet = uint32_t(facets_.size());
+            for (uint32_t f = 0; f < cut.facet_count; ++f) facets_.push_back(pairs[2 * c + f]);
+            // The parent to blend with: a neighbourhood, not a large part of the image.
+            const uint32_t p = shape_.parent[cut.node];
+            if (p == kNone) continue;
+            const double own = std::max(diagonal(hierarchy_.nodes[cut.node]), double(params_.radius));
+            if (diagonal(hierarchy_.nodes[p]) <= kParentSpan * own) cut.parent = p;
+        }
+        bins_ = std::vector<std::atomic<int64_t>>(facets_.size() * kBinValues);
+        for (std::atomic<int64_t>& b : bins_) b.store(0, std::memory_order_relaxed);
+    }
+
+    static bool usable(const Photon& photon, const glm::vec3& p) {
+        return is_finite(p) && is_finite(photon.power) && is_finite(photon.wi) && is_finite(photon.normal);
+    }
+
+    // unit_ = the value of one fixed-point step: N × the largest |contribution| = 2^61 steps.
+    void choose_fixed_point_unit() {
+        double largest = 0.0;
+        for (size_t j = 0; j < photons_.size(); ++j) {
+            if (!usable(photons_[j], positions_[j])) continue;
+            const glm::vec3 a = glm::abs(photons_[j].power);
+            largest = std::max(largest, double(std::max(a.x, std::max(a.y, a.z))));
+        }
+        const double max_weight = params_.kernel == Kernel::uniform ? 1.0 : 2.0;
+        unit_ = largest * max_weight * double(std::max<size_t>(photons_.size(), 1)) / kFixedPointRange;
+        inv_unit_ = unit_ > 0.0 ? 1.0 / unit_ : 0.0;
+    }
+
+    // Photon indices in Morton order of position (10 bits an axis over the photons' box), ties by index.
+    std::vector<uint32_t> spatial_order() const {
+        glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+        for (const glm::vec3& p : positions_)
+            if (is_finite(p)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+        const glm::dvec3 scale = glm::dvec3(1023.0) / glm::max(glm::dvec3(hi) - glm::dvec3(lo), glm::dvec3(1e-30));
+        const auto spread = [](uint32_t v) {  // bit i of a 10-bit value to bit 3i
+            v &= 1023u;
+            v = (v | v << 16) & 0x030000FFu;
+            v = (v | v << 8) & 0x0300F00Fu;
+            v = (v | v << 4) & 0x030C30C3u;
+            v = (v | v << 2) & 0x09249249u;
+            return v;
+        };
+        std::vector<std::pair<uint32_t, uint32_t>> keyed(positions_.size());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, keyed.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t j = r.begin(); j != r.end(); ++j) {
+                uint32_t key = 0;
+                if (is_finite(positions_[j])) {
+                    const glm::dvec3 q = glm::min((glm::dvec3(positions_[j]) - glm::dvec3(lo)) * scale, 1023.0);
+                    key = spread(uint32_t(q.x)) | spread(uint32_t(q.y)) << 1 | spread(uint32_t(q.z)) << 2;
+                }
+                keyed[j] = {key, uint32_t(j)};
+            }
+        });
+        std::sort(keyed.begin(), keyed.end());
+        std::vector<uint32_t> order(keyed.size());
+        for (size_t j = 0; j < keyed.size(); ++j) order[j] = keyed[j].second;
+        return order;
+    }
+
+    // A task's deposits, summed locally (as integers, so exactly), then added to the shared bins once per facet.
+    struct LocalBins {
+        std::vector<uint32_t> slot_of;  // per facet: its slot in `sums`, or kNone
+        std::vector<uint32_t> touched;  // facets in slot order
+        std::vector<int64_t> sums;      // slot × bin × value
+    };
+
+    void flush(LocalBins& local) {
+        for (size_t t = 0; t < local.touched.size(); ++t) {
+            const int64_t* from = &local.sums[t * kBinValues];
+            std::atomic<int64_t>* to = &bins_[size_t(local.touched[t]) * kBinValues];
+            for (int v = 0; v < kBinValues; ++v)
+                if (from[v] != 0) to[v].fetch_add(from[v], std::memory_order_relaxed);
+            local.slot_of[local.touched[t]] = kNone;
+        }
+        local.touched.clear();
+        local.sums.clear();
+    }
+
+    void traverse() {
+        struct Packed {  // a photon's data, packed in traversal order: read sequentially
+            glm::vec3 position, wi, normal, power;
+        };
+        std::vector<Packed> packed;
+        {
+            const std::vector<uint32_t> order = spatial_order();
+            packed.reserve(order.size());
+            for (const uint32_t j : order)
+                if (usable(photons_[j], positions_[j]))
+                    packed.push_back({positions_[j], photons_[j].wi, photons_[j].normal, photons_[j].power});
+        }
+        const float r2 = params_.radius * params_.radius;
+        const float reject_box = r2 * (1.0f + 1e-5f);  // a margin, as in `cluster`: never drops a reachable node
+        const bool plane_test = params_.plane_distance_factor > 0.0f;
+        const uint64_t total = positions_.size() + cuts_.size();
+        std::atomic<uint64_t> done{0};
+        tbb::enumerable_thread_specific<LocalBins> locals([&] {
+            LocalBins local;
+            local.slot_of.assign(facets_.size(), kNone);
+            return local;
+        });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, packed.size(), kPhotonsPerTask), [&](const tbb::blocked_range<size_t>& range) {
+            control_.check();
+            LocalBins& local = locals.local();
+            std::vector<uint32_t> stack;
+            stack.reserve(8 * size_t(hierarchy_.depth + 1));
+            uint64_t tests = 0, deposits = 0, pairs = 0;
+            for (size_t o = range.begin(); o != range.end(); ++o) {
+                const Packed& photon = packed[o];
+                const glm::vec3& p = photon.position;
+                const double mean_power = (double(photon.power.x) + photon.power.y + photon.power.z) / 3.0;
+                stack.push_back(hierarchy_.root);
+                while (!stack.empty()) {
+                    const uint32_t index = stack.back();
+                    stack.pop_back();
+                    const uint32_t c = cut_of_[index];
+                    if (c == kNone) {  // above the cut: sphere vs box, then the children
+                        ++tests;
+                        const ClusterNode& node = hierarchy_.nodes[index];
+                        const glm::vec3 gap = glm::max(glm::max(node.box_min - p, p - node.box_max), glm::vec3(0.0f));
+                        if (glm::dot(gap, gap) > reject_box) continue;
+                        for (uint32_t k = node.child_count; k-- > 0;) stack.push_back(node.first_child + k);
+                        continue;
+                    }
+                    const Cut& cut = cuts_[c];
+                    for (uint32_t f = cut.first_facet; f != cut.first_facet + cut.facet_count; ++f) {
+                        ++tests;
+                        const Facet& facet = facets_[f];
+                        const glm::vec3 d = facet.centroid - p;
+                        if (!(glm::dot(d, d) < r2)) continue;
+                        if (glm::dot(facet.axis, photon.wi) <= facet.facing_reject) continue;
+                        if (glm::dot(facet.axis, photon.normal) <= facet.normal_reject) continue;
+                        if (plane_test && !(std::fabs(glm::dot(facet.axis, d)) < facet.plane_reject)) continue;
+                        uint32_t& slot = local.slot_of[f];
+                        if (slot == kNone) {
+                            slot = uint32_t(local.touched.size());
+                            local.touched.push_back(f);
+                            local.sums.resize(local.sums.size() + kBinValues, 0);
+                        }
+                        int64_t* bin = &local.sums[size_t(slot) * kBinValues + bin_of(facet, photon.wi) * kSlots];
+                        // Each contribution is rounded on its own (towards zero), so no sum depends on grouping.
+                        const double w = kernel_weight(d, params_) * inv_unit_;
+                        const double wm = w * mean_power;
+                        bin[0] += int64_t(w * photon.power.x);
+                        bin[1] += int64_t(w * photon.power.y);
+                        bin[2] += int64_t(w * photon.power.z);
+                        bin[3] += int64_t(wm * photon.wi.x);
+                        bin[4] += int64_t(wm * photon.wi.y);
+                        bin[5] += int64_t(wm * photon.wi.z);
+                        ++deposits;
+                        pairs += facet.samples;
+                    }
+                }
+            }
+            flush(local);
+            node_tests_ += tests;
+            deposits_ += deposits;
+            pairs_ += pairs;
+            control_.advance(done += range.size(), total);
+        });
+    }
+
+    // A facet's bins as doubles in flux units.
+    void facet_values(uint32_t f, double* values) const {
+        const std::atomic<int64_t>* from = &bins_[size_t(f) * kBinValues];
+        for (int v = 0; v < kBinValues; ++v) values[v] = double(from[v].load(std::memory_order_relaxed)) * unit_;
+    }
+
+    // P's estimate for facet `own`: Σ m_g·(bins of g) / Σ m_g over the facets g under P whose axis is within τ of
+    // own's, each bin re-binned by the world octant of its mean direction (facets' bins have different poles).
+    // Returns how many bins it wrote, 0 when P has no such facet or too many facets to be worth it.
+    int parent_bins(uint32_t parent, const Facet& own, ShadeBin* out) const {
+        const ClusterNode& p = hierarchy_.nodes[parent];
+        const auto by_sample = [&](const Cut& cut, uint32_t sample) {
+            return hierarchy_.nodes[cut.node].sample_begin < sample;
+        };
+        const auto first = std::lower_bound(cuts_.begin(), cuts_.end(), p.sample_begin, by_sample);
+        const auto last = std::lower_bound(first, cuts_.end(), p.sample_end, by_sample);
+        if (first == last || size_t(last - first) > kMaxParentFacets) return 0;
+        double sums[kBinValues] = {};
+        double weight = 0.0;
+        const float cos_tau = std::clamp(params_.cos_normal_tolerance, -1.0f, 1.0f);
+        for (auto cut = first; cut != last; ++cut)
+            for (uint32_t g = cut->first_facet; g != cut->first_facet + cut->facet_count; ++g) {
+                if (!(glm::dot(facets_[g].axis, own.axis) > cos_tau)) continue;
+                double values[kBinValues];
+                facet_values(g, values);
+                const double m = facets_[g].samples;
+                for (int b = 0; b < kBins; ++b) {
+                    const double* v = values + b * kSlots;
+                    if (v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0) continue;
+                    double* to = sums + world_octant(glm::dvec3(v[3], v[4], v[5])) * kSlots;
+                    for (int s = 0; s < kSlots; ++s) to[s] += m * v[s];
+                }
+                weight += m;
+            }
+        return weight > 0.0 ? shade_bins(sums, 1.0 / weight, out) : 0;
+    }
+
+    void shade() {
+        const uint64_t total = positions_.size() + cuts_.size();
+        std::atomic<uint64_t> shaded{0};
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), kCutNodesPerTask), [&](const tbb::blocked_range<size_t>& range) {
+            control_.check();
+            uint64_t evaluations = 0;
+            for (size_t c = range.begin(); c != range.end(); ++c) {
+                const Cut& cut = cuts_[c];
+                const Facet* facets = &facets_[cut.first_facet];
+                ShadeBin own[2][kBins], parent[2][kBins];
+                int own_count[2] = {0, 0}, parent_count[2] = {0, 0};
+                for (uint32_t f = 0; f < cut.facet_count; ++f) {
+                    double values[kBinValues];
+                    facet_values(cut.first_facet + f, values);
+                    own_count[f] = shade_bins(values, 1.0, own[f]);
+                    if (cut.parent != kNone) parent_count[f] = parent_bins(cut.parent, facets[f], parent[f]);
+                }
+                const ClusterNode& node = hierarchy_.nodes[cut.node];
+                for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+                    const uint32_t i = hierarchy_.sample_order[k];
+                    const ViewSample& s = views_[i];
+                    if (cut.facet_count == 0 || !is_finite(s.position)) continue;  // stays 0, as in brute
+                    const uint32_t f = facet_of(s, facets, cut.facet_count);
+                    if (own_count[f] == 0 && parent_count[f] == 0) continue;
+                    glm::dvec3 flux = reflect_bins(s, own[f], own_count[f]);
+                    evaluations += own_count[f];
+                    if (parent_count[f] > 0) {
+                        const Facet& facet = facets[f];
+                        const double t =
+                            facet.reach > 0.0f ? double(glm::length(s.position - facet.centroid)) / facet.reach : 0.0;
+                        const double beta = kMaxParentBlend * std::min(1.0, t);
+                        flux = (1.0 - beta) * flux + beta * reflect_bins(s, parent[f], parent_count[f]);
+                        evaluations += parent_count[f];
+                    }
+                    radiance_[i] = finish_sample(s, flux, params_);
+                }
+            }
+            bin_evaluations_ += evaluations;
+            control_.advance(positions_.size() + (shaded += range.size()), total);
+        });
+    }
+
+    const ClusterHierarchy& hierarchy_;
+    const std::vector<ViewSample>& views_;
+    const std::vector<Photon>& photons_;
+    const SplatParams& params_;
+    const RenderControl& control_;
+    Stats& stats_;
+    const TreeShape shape_;
+    const int level_;
+    const std::vector<glm::vec3> positions_;
+    std::vector<glm::vec3> radiance_;
+
+    std::vector<Cut> cuts_;                   // in sample order
+    std::vector<uint32_t> cut_of_;            // per hierarchy node: its index in cuts_, or kNone
+    std::vector<Facet> facets_;               // cut by cut
+    std::vector<std::atomic<int64_t>> bins_;  // facet × bin × value, fixed point
+    double unit_ = 0.0, inv_unit_ = 0.0;
+
+    std::atomic<uint64_t> node_tests_{0}, deposits_{0}, pairs_{0}, bin_evaluations_{0};
+};
+
+}  // namespace
+
+std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                         const PhotonMap& photons, const SplatParams& params,
+                                         const RenderControl& control, Stats& stats) {
+    validate(params, photons);
+    const std::vector<ViewSample>& views = samples.samples;
+    if (hierarchy.sample_order.size() != views.size())
+        throw InvalidInput("cluster hierarchy", "built over " + std::to_string(hierarchy.sample_order.size()) +
+                                                    " view samples, but " + std::to_string(views.size()) +
+                                                    " were given");
+    if (photons.photons.size() >= std::numeric_limits<uint32_t>::max())
+        throw InvalidInput("photons", "too many photons for 32-bit photon indices");
+    control.check();
+    for (const char* name : {"photon_node_tests", "node_deposits", "photon_sample_tests", "contributing_pairs",
+                             "bin_evaluations", "directional_cut_nodes", "directional_facets"})
+        stats.counters[name] += 0.0;  // present even when there is nothing to splat
+    stats.bytes["direction_bins"] = 0.0;
+    stats.values["directional_exact_fallback"] = 0.0;
+    if (hierarchy.empty() || photons.photons.empty()) {
+        stats.values["directional_level"] = std::max(params.directional_level, 0);
+        return std::vector<glm::vec3>(views.size(), glm::vec3(0.0f));  // (emitted may be 0: nothing to finish)
+    }
+    TreeShape shape = tree_shape(hierarchy);
+    const auto [level, fallback] = choose_level(hierarchy, shape, params);
+    stats.values["directional_level"] = fallback ? -1.0 : double(level);
+    if (fallback) {
+        stats.values["directional_exact_fallback"] = 1.0;
+        return splat_cluster(hierarchy, samples, photons, params, control, stats);
+    }
+    return DirectionalSplat(hierarchy, samples, photons, params, control, stats, std::move(shape), level).run();
+}
+
+}  // namespace ps

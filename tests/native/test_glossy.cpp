@@ -1,0 +1,586 @@
+// Glossy receivers: the GGX lobe of brdf.h on its own (energy, reciprocity, sampling), then as every stage of the
+// pipeline sees it: the material's mirror threshold, direct light (highlight position, furnace), photon tracing
+// (storage, caustic flag, Russian roulette) and the exact splats on a scene full of glossy surfaces.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "photonsplat/brdf.h"
+#include "photonsplat/direct_light.h"
+#include "photonsplat/errors.h"
+#include "photonsplat/materials.h"
+#include "photonsplat/photons.h"
+#include "photonsplat/render.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/splat.h"
+#include "photonsplat/view_samples.h"
+#include "test_scenes.h"
+
+namespace {
+
+using namespace ps;
+
+constexpr double kPi = 3.14159265358979323846;
+
+Material glossy_material(const char* name, glm::vec3 color, float roughness) {
+    Material m{name, MaterialKind::glossy, color, 1.45f, glm::vec3(0.0f)};
+    m.roughness = roughness;
+    return m;
+}
+
+// A unit direction at polar angle theta from n (azimuth phi around it).
+glm::vec3 direction_around(const glm::vec3& n, double theta, double phi) {
+    glm::vec3 b1, b2;
+    orthonormal_basis(n, b1, b2);
+    return glm::normalize(float(std::sin(theta) * std::cos(phi)) * b1 + float(std::sin(theta) * std::sin(phi)) * b2 +
+                          float(std::cos(theta)) * n);
+}
+
+// The directions ωi = reflect(ωo, h) of all half-vectors h above n with ωo·h > 0, each with its share dωi of solid
+// angle, for a midpoint rule in the variables that make D(h)·cosθh uniform: ξ = tan²θh / (α² + tan²θh) and
+// φ/(2π). Then dωh = dξ d(φ/2π) / (D cosθh) and dωi = 4 (ωo·h) dωh. Deterministic and accurate even for a very
+// sharp lobe, and independent of the sampling routine under test.
+template <class Visit>
+void for_each_reflection(float alpha, const glm::vec3& n, const glm::vec3& wo, Visit&& visit, int steps = 600) {
+    glm::vec3 b1, b2;
+    orthonormal_basis(n, b1, b2);
+    const double cell = 1.0 / (double(steps) * steps);
+    for (int i = 0; i < steps; ++i) {
+        // ξ = 1 − (1 − t)², dξ = 2(1 − t) dt, with t on the grid: 1/cosθh grows as (1 − ξ)^(−1/2) towards the
+        // horizon, which this cancels (a plain grid in ξ would converge slowly there).
+        const double t = (i + 0.5) / steps, xi = 1.0 - (1.0 - t) * (1.0 - t), dxi_dt = 2.0 * (1.0 - t);
+        const double tan_theta = alpha * std::sqrt(xi / (1.0 - xi));
+        const double cos_h = 1.0 / std::sqrt(1.0 + tan_theta * tan_theta), sin_h = tan_theta * cos_h;
+        for (int j = 0; j < steps; ++j) {
+            const double phi = 2.0 * kPi * (j + 0.5) / steps;
+            const glm::vec3 h = glm::normalize(float(sin_h * std::cos(phi)) * b1 + float(sin_h * std::sin(phi)) * b2 +
+                                               float(cos_h) * n);
+            const double oh = glm::dot(wo, h);
+            if (!(oh > 0.0)) continue;
+            const glm::vec3 wi = glm::normalize(float(2.0 * oh) * h - wo);
+            visit(wi, cell * dxi_dt * 4.0 * oh / (ggx_distribution(n, h, alpha) * cos_h));
+        }
+    }
+}
+
+// ∫ g(ωi) dωi over those directions.
+template <class G>
+double integrate_over_reflections(float alpha, const glm::vec3& n, const glm::vec3& wo, G&& g, int steps = 600) {
+    double sum = 0.0;
+    for_each_reflection(alpha, n, wo, [&](const glm::vec3& wi, double d_omega) { sum += g(wi) * d_omega; }, steps);
+    return sum;
+}
+
+// Directional albedo ∫ f cos dωi of one channel of the lobe.
+double directional_albedo(const glm::vec3& f0, float alpha, const glm::vec3& n, const glm::vec3& wo, int channel = 0,
+                          int steps = 600) {
+    return integrate_over_reflections(alpha, n, wo, [&](const glm::vec3& wi) {
+        return double(ggx_reflection(f0, alpha, n, wi, wo)[channel]) * std::max(0.0f, glm::dot(n, wi));
+    }, steps);
+}
+
+// --- the lobe on its own ---------------------------------------------------------------------------------------
+
+TEST(GgxLobe, NormalDistributionAndVisibleNormalsAreNormalised) {
+    const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
+    for (float alpha : {0.0025f, 0.04f, 0.25f, 0.64f, 1.0f}) {
+        // ∫ D(h) cosθh dωh = 1, by a plain θ, φ midpoint rule over the hemisphere of half-vectors.
+        const int steps = 4000;
+        double sum = 0.0;
+        for (int i = 0; i < steps; ++i) {
+            // Concentrate the θ nodes near 0, where a sharp D lives: θ = (π/2) t³.
+            const double t = (i + 0.5) / steps, theta = 0.5 * kPi * t * t * t, dtheta = 1.5 * kPi * t * t / steps;
+            const double d = ggx_distribution(n, direction_around(n, theta, 0.0), alpha);
+            sum += d * std::cos(theta) * std::sin(theta) * dtheta * 2.0 * kPi;  // isotropic: φ integrates to 2π
+        }
+        EXPECT_NEAR(sum, 1.0, 2e-3) << "∫ D cos dω, alpha " << alpha;
+        // Visible normals: ∫ G1(ωo) max(0, ωo·h) D(h) / (n·ωo) dωh = 1 for every ωo.
+        for (double theta_o : {0.0, 0.7, 1.4}) {
+            const glm::vec3 wo = direction_around(n, theta_o, 0.4);
+            const double g1 = ggx_smith_g1(n, wo, alpha), cos_o = glm::dot(n, wo);
+            double visible = 0.0;
+            for (int i = 0; i < 800; ++i) {
+                const double t = (i + 0.5) / 800, theta = 0.5 * kPi * t * t * t, dtheta = 1.5 * kPi * t * t / 800;
+                for (int j = 0; j < 400; ++j) {
+                    const double phi = 2.0 * kPi * (j + 0.5) / 400;
+                    const glm::vec3 h = direction_around(n, theta, phi);
+                    visible += g1 * std::max(0.0f, glm::dot(wo, h)) * ggx_distribution(n, h, alpha) / cos_o *
+                               std::sin(theta) * dtheta * (2.0 * kPi / 400);
+                }
+            }
+            EXPECT_NEAR(visible, 1.0, 5e-3) << "visible normals, alpha " << alpha << ", theta_o " << theta_o;
+        }
+    }
+}
+
+TEST(GgxLobe, WhiteFurnaceReflectsAtMostAllTheLightAndNearlyAllWhenSmooth) {
+    const glm::vec3 n(0.0f, 0.0f, 1.0f), white(1.0f);
+    for (float roughness : {0.06f, 0.1f, 0.3f, 0.5f, 0.8f, 1.0f}) {
+        const float alpha = roughness * roughness;
+        for (double theta_o : {0.0, 0.5, 1.0, 1.3, 1.5}) {
+            const glm::vec3 wo = direction_around(n, theta_o, 0.0);
+            const double e = directional_albedo(white, alpha, n, wo, 0, 300);
+            EXPECT_LE(e, 1.0 + 1e-3) << "roughness " << roughness << ", theta_o " << theta_o;
+            // Single scattering with Cycles 3.4's separable Smith G loses up to ~70 % at roughness 1.
+            EXPECT_GT(e, 0.25) << "roughness " << roughness << ", theta_o " << theta_o;
+            if (roughness <= 0.1f && theta_o <= 1.0) {
+                EXPECT_GT(e, 0.99) << "a smooth lobe loses almost nothing";
+            }
+        }
+    }
+    // The half-vector quadrature agrees with a plain one over ωi where the lobe is wide enough for the latter.
+    const glm::vec3 wo = direction_around(n, 0.6, 0.0);
+    const float alpha = 0.49f;
+    double plain = 0.0;
+    const int steps = 1500;
+    for (int i = 0; i < steps; ++i) {
+        const double theta = 0.5 * kPi * (i + 0.5) / steps;
+        for (int j = 0; j < steps; ++j) {
+            const double phi = 2.0 * kPi * (j + 0.5) / steps;
+            const glm::vec3 wi = direction_around(n, theta, phi);
+            plain += ggx_reflection(white, alpha, n, wi, wo).x * std::cos(theta) * std::sin(theta);
+        }
+    }
+    plain *= (0.5 * kPi / steps) * (2.0 * kPi / steps);
+    EXPECT_NEAR(plain, directional_albedo(white, alpha, n, wo), 2e-3);
+}
+
+TEST(GgxLobe, IsReciprocalAndZeroBelowTheSurface) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (int k = 0; k < 2000; ++k) {
+        const glm::vec3 n = sample_uniform_sphere(u(rng), u(rng));
+        const glm::vec3 wi = sample_cosine_hemisphere(n, u(rng), u(rng));
+        const glm::vec3 wo = sample_cosine_hemisphere(n, u(rng), u(rng));
+        const glm::vec3 f0(u(rng), u(rng), u(rng));
+        const float alpha = std::max(0.0025f, u(rng) * u(rng));
+        const glm::vec3 a = ggx_reflection(f0, alpha, n, wi, wo), b = ggx_reflection(f0, alpha, n, wo, wi);
+        for (int c = 0; c < 3; ++c) {
+            ASSERT_TRUE(std::isfinite(a[c]) && a[c] >= 0.0f);
+            EXPECT_NEAR(a[c], b[c], 1e-5f * std::max(a[c], 1e-6f)) << "pair " << k;
+        }
+        EXPECT_EQ(ggx_reflection(f0, alpha, n, -wi, wo), glm::vec3(0.0f));
+        EXPECT_EQ(ggx_reflection(f0, alpha, n, wi, -wo), glm::vec3(0.0f));
+    }
+}
+
+TEST(GgxLobe, SamplingPdfIntegratesToOneAndWeightsAreFCosOverPdf) {
+    const glm::vec3 n = glm::normalize(glm::vec3(-0.2f, 0.1f, 1.0f));
+    const glm::vec3 f0(0.95f, 0.64f, 0.54f);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (float alpha : {0.0036f, 0.09f, 0.36f, 0.81f}) {
+        for (double theta_o : {0.2, 0.9, 1.35}) {
+            const glm::vec3 wo = direction_around(n, theta_o, 1.0);
+            const int count = 100000;
+            int failed = 0;
+            double weight_sum = 0.0;
+            // Bins of cosθi: the sampled histogram against the pdf integrated over each bin.
+            constexpr int kBins = 8;
+            double histogram[kBins] = {}, expected[kBins] = {};
+            for (int k = 0; k < count; ++k) {
+                const GgxSample s = sample_ggx_reflection(f0, alpha, n, wo, u(rng), u(rng));
+                if (!(s.pdf > 0.0f)) {
+                    ++failed;
+                    EXPECT_EQ(s.weight, glm::vec3(0.0f));
+                    continue;
+                }
+                ASSERT_NEAR(glm::length(s.direction), 1.0f, 1e-5f);
+                // The returned pdf is the pdf function's, and the weight is f·cos/pdf.
+                const float pdf = ggx_reflection_pdf(alpha, n, s.direction, wo);
+                EXPECT_NEAR(s.pdf, pdf, 2e-3f * pdf);
+                const glm::vec3 f = ggx_reflection(f0, alpha, n, s.direction, wo);
+                const float cos_i = glm::dot(n, s.direction);
+                for (int c = 0; c < 3; ++c) {
+                    EXPECT_LE(s.weight[c], 1.0f);
+                    EXPECT_NEAR(s.weight[c], f[c] * cos_i / pdf, 3e-3f * s.weight[c] + 1e-6f);
+                }
+                weight_sum += s.weight.y;
+                histogram[std::min(kBins - 1, int(cos_i * kBins))] += 1.0;
+            }
+            // The pdf over the directions above the surface, and the probability of reflecting below it (the
+            // same density G1(ωo) D(h) / (4 n·ωo) continued there), by quadrature.
+            double pdf_integral = 0.0, below = 0.0;
+            const float g1_o = ggx_smith_g1(n, wo, alpha), cos_o = glm::dot(n, wo);
+            for_each_reflection(alpha, n, wo, [&](const glm::vec3& wi, double d_omega) {
+                const double p = ggx_reflection_pdf(alpha, n, wi, wo) * d_omega;
+                if (glm::dot(n, wi) > 0.0f) {
+                    pdf_integral += p;
+                    expected[std::min(kBins - 1, int(glm::dot(n, wi) * kBins))] += p;
+                } else {
+                    const glm::vec3 h = glm::normalize(wi + wo);
+                    below += g1_o * ggx_distribution(n, h, alpha) / (4.0 * cos_o) * d_omega;
+                }
+            });
+            EXPECT_NEAR(pdf_integral + below, 1.0, 2e-4) << "alpha " << alpha << ", theta_o " << theta_o;
+            const double failed_fraction = double(failed) / count;
+            EXPECT_NEAR(failed_fraction, below, 4.0 * std::sqrt(below * (1.0 - below) / count) + 1e-4)
+                << "alpha " << alpha << ", theta_o " << theta_o;
+            for (int b = 0; b < kBins; ++b) {
+                const double p = expected[b];  // the bin's probability
+                const double sigma = std::sqrt(std::max(0.0, p * (1.0 - p)) / count);
+                EXPECT_NEAR(histogram[b] / count, p, 5.0 * sigma + 1e-3) << "bin " << b << ", alpha " << alpha;
+            }
+            // Importance sampling estimates the same ∫ f cos as quadrature.
+            const double albedo = directional_albedo(f0, alpha, n, wo, 1);
+            EXPECT_NEAR(weight_sum / count, albedo, 0.01 * albedo) << "alpha " << alpha << ", theta_o " << theta_o;
+        }
+    }
+}
+
+TEST(GgxLobe, ImportanceAndUniformSamplingAgreeOnTheReflectedEnergy) {
+    const glm::vec3 n(0.0f, 0.0f, 1.0f), f0(0.9f, 0.6f, 0.3f);
+    const float alpha = 0.36f;
+    const glm::vec3 wo = direction_around(n, 0.7, 0.0);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const int count = 400000;
+    double importance = 0.0, importance_sq = 0.0, uniform = 0.0, uniform_sq = 0.0;
+    for (int k = 0; k < count; ++k) {
+        const double w = sample_ggx_reflection(f0, alpha, n, wo, u(rng), u(rng)).weight.x;
+        importance += w, importance_sq += w * w;
+        // Uniform over the hemisphere: pdf 1/(2π).
+        glm::vec3 wi = sample_uniform_sphere(u(rng), u(rng));
+        if (wi.z < 0.0f) wi.z = -wi.z;
+        const double v = ggx_reflection(f0, alpha, n, wi, wo).x * wi.z * 2.0 * kPi;
+        uniform += v, uniform_sq += v * v;
+    }
+    const double mi = importance / count, mu = uniform / count;
+    const double si = std::sqrt((importance_sq / count - mi * mi) / count);
+    const double su = std::sqrt((uniform_sq / count - mu * mu) / count);
+    EXPECT_NEAR(mi, mu, 4.0 * std::hypot(si, su));
+    EXPECT_LT(si, su) << "importance sampling should be the better estimator";
+}
+
+// --- the material --------------------------------------------------------------------------------------------
+
+TEST(GlossyMaterial, SmoothGlossyIsAMirrorAndRoughnessIsValidated) {
+    EXPECT_EQ(material_kind_from_string("glossy"), MaterialKind::glossy);
+    EXPECT_STREQ(to_string(MaterialKind::glossy), "glossy");
+    EXPECT_TRUE(glossy_material("g", glm::vec3(1.0f), 0.05f).is_specular());
+    EXPECT_FALSE(glossy_material("g", glm::vec3(1.0f), 0.05f).is_glossy());
+    EXPECT_TRUE(glossy_material("g", glm::vec3(1.0f), 0.06f).is_glossy());
+    EXPECT_FALSE(glossy_material("g", glm::vec3(1.0f), 0.06f).is_specular());
+    EXPECT_FLOAT_EQ(glossy_material("g", glm::vec3(1.0f), 0.5f).glossy_alpha(), 0.25f);
+    for (float bad : {std::nanf(""), -1.0f, 2.0f, INFINITY}) {
+        try {
+            validate(glossy_material("shiny", glm::vec3(1.0f), bad), "material 'shiny'");
+            FAIL() << "roughness " << bad << " accepted";
+        } catch (const InvalidInput& e) {
+            EXPECT_EQ(e.field(), "material 'shiny'.roughness");
+        }
+    }
+}
+
+// --- direct light --------------------------------------------------------------------------------------------
+
+// A 40 m glossy plane at z = 0 seen from (−2, 0, 1) under a point light at (0, 0, 1): the mirror image of the light
+// is at (0, 0, −1), so the highlight sits where the line from the camera to it crosses the plane: (−1, 0, 0).
+TEST(GlossyDirectLight, PointLightHighlightSitsAtTheMirrorPointAndMatchesTheBrdf) {
+    Scene scene;
+    scene.add_material(glossy_material("metal", glm::vec3(0.9f, 0.7f, 0.5f), 0.2f));
+    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
+    Light light;
+    light.kind = LightKind::point;
+    light.position = {0.0f, 0.0f, 1.0f};
+    light.value = glm::vec3(50.0f);
+    scene.add_light(light);
+    const Camera camera = test::look_at({-2, 0, 1}, {-1, 0, 0}, 96, 96, 30.0f);
+    RenderControl control;
+    Stats stats;
+    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    ASSERT_EQ(samples.samples.size(), 96u * 96u);
+    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
+
+    size_t brightest = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        const ViewSample& s = samples.samples[i];
+        ASSERT_TRUE(s.flags & kGlossy);
+        ASSERT_EQ(s.albedo, glm::vec3(0.0f));
+        ASSERT_FLOAT_EQ(s.roughness, 0.04f);
+        if (luminance(direct[i]) > luminance(direct[brightest])) brightest = i;
+        // Each sample: I · cosθ / d² · f_r, the BRDF evaluated for the light's direction.
+        const glm::vec3 x = s.position + samples.origin, to_light = light.position - x;
+        const float d2 = glm::dot(to_light, to_light);
+        const glm::vec3 wi = to_light / std::sqrt(d2);
+        const glm::vec3 expected = light.value * wi.z / d2 * ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo);
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, double(std::fabs(direct[i][c] - expected[c])) / (expected[c] + 1e-3));
+    }
+    EXPECT_LT(worst, 1e-3) << "worst relative error of the glossy direct light";
+    const glm::vec3 peak = samples.samples[brightest].position + samples.origin;
+    const float pixel = 2.0f * std::tan(15.0f * 3.14159265f / 180.0f) * std::sqrt(2.0f) / 96.0f * std::sqrt(2.0f);
+    EXPECT_NEAR(peak.x, -1.0f, 2.0f * pixel) << "highlight along the view direction";
+    EXPECT_NEAR(peak.y, 0.0f, 2.0f * pixel) << "highlight across it";
+    EXPECT_GT(luminance(direct[brightest]), 20.0f * luminance(direct[0])) << "a highlight, not a flat shading";
+}
+
+// Under a uniform sky of radiance 1 (and nothing else), a rough plane reflects exactly its directional albedo
+// ∫ f cos dωi towards each pixel: the furnace integral, computed here by quadrature.
+TEST(GlossyDirectLight, RoughPlaneUnderAUniformSkyReflectsItsDirectionalAlbedo) {
+    Scene scene;
+    const glm::vec3 f0(0.95f, 0.64f, 0.54f);
+    scene.add_material(glossy_material("gold", f0, 0.8f));
+    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
+    scene.set_background(glm::vec3(1.0f));
+    const Camera camera = test::look_at({0, -2, 1.5f}, {0, 0, 0}, 24, 24, 40.0f);
+    RenderControl control;
+    Stats stats;
+    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    ASSERT_EQ(samples.samples.size(), 24u * 24u);
+    DirectLightSettings settings;
+    settings.samples_per_light = 1024;
+    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, settings, control, stats);
+    glm::dvec3 rendered(0.0), expected(0.0);
+    for (size_t i = 0; i < samples.samples.size(); i += 7) {  // every 7th sample: the quadrature is the cost
+        const ViewSample& s = samples.samples[i];
+        rendered += glm::dvec3(direct[i]);
+        for (int c = 0; c < 3; ++c)
+            expected[c] += integrate_over_reflections(s.roughness, s.shading_normal, s.wo, [&](const glm::vec3& wi) {
+                return double(ggx_reflection(f0, s.roughness, s.shading_normal, wi, s.wo)[c]) * wi.z;
+            }, 200);
+    }
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(rendered[c] / expected[c], 1.0, 0.02) << "channel " << c;
+        EXPECT_LT(expected[c], 576.0 / 7.0 + 1.0);  // F0 < 1: below the white furnace's 1 per sample
+    }
+}
+
+// A sharp lobe under the sky samples its own directions (the sky's cosine-weighted ones would almost never fall
+// into it): with the default 4 shadow rays the pixels are already within a few % of their directional albedo
+// (cosine-weighted sky directions would land in this lobe about once in 700 rays: most pixels would be black). A
+// sample with a diffuse part as well (albedo ρ: it reflects ρ·1 of a uniform sky) gets both.
+TEST(GlossyDirectLight, SharpLobeUnderTheSkyIsSampledByTheLobe) {
+    Scene scene;
+    const glm::vec3 f0(0.9f, 0.9f, 0.9f);
+    scene.add_material(glossy_material("chrome", f0, 0.15f));
+    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
+    scene.set_background(glm::vec3(2.0f));
+    const Camera camera = test::look_at({0, -2, 1.5f}, {0, 0, 0}, 12, 12, 40.0f);
+    RenderControl control;
+    Stats stats;
+    ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    ASSERT_EQ(samples.samples.size(), 144u);
+    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
+    std::vector<double> albedo(samples.samples.size());
+    double squared_error = 0.0, worst = 0.0;
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        const ViewSample& s = samples.samples[i];
+        albedo[i] = directional_albedo(f0, s.roughness, s.shading_normal, s.wo, 0, 200);
+        const double error = direct[i].x / (2.0 * albedo[i]) - 1.0;
+        squared_error += error * error;
+        worst = std::max(worst, std::fabs(error));
+    }
+    // Only the rare direction reflected below the horizon (part of the albedo's loss) makes a pixel differ.
+    EXPECT_LT(std::sqrt(squared_error / samples.samples.size()), 0.05);
+    EXPECT_LT(worst, 0.3);
+    for (ViewSample& s : samples.samples) s.albedo = glm::vec3(0.3f);
+    const std::vector<glm::vec3> both = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
+    double rendered = 0.0, expected = 0.0;
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        rendered += both[i].x;
+        expected += 2.0 * (0.3 + albedo[i]);
+    }
+    EXPECT_NEAR(rendered / expected, 1.0, 0.03);
+}
+
+// --- photons -------------------------------------------------------------------------------------------------
+
+// A closed white box (diffuse walls of albedo 1) over a floor of kind glossy with F0 = 1, lit by a point light.
+void build_white_box_with_glossy_floor(Scene& scene, float floor_roughness) {
+    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(1.0f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t floor = scene.add_material(glossy_material("floor", glm::vec3(1.0f), floor_roughness));
+    test::add_quad(scene, "floor", {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, floor);
+    test::add_quad(scene, "ceiling", {-1, -1, 2}, {-1, 1, 2}, {1, 1, 2}, {1, -1, 2}, white);
+    test::add_quad(scene, "back", {-1, 1, 0}, {1, 1, 0}, {1, 1, 2}, {-1, 1, 2}, white);
+    test::add_quad(scene, "front", {-1, -1, 0}, {-1, -1, 2}, {1, -1, 2}, {1, -1, 0}, white);
+    test::add_quad(scene, "left", {-1, -1, 0}, {-1, 1, 0}, {-1, 1, 2}, {-1, -1, 2}, white);
+    test::add_quad(scene, "right", {1, -1, 0}, {1, -1, 2}, {1, 1, 2}, {1, 1, 0}, white);
+    Light light;
+    light.name = "lamp";
+    light.position = {0.0f, 0.0f, 1.0f};
+    light.value = glm::vec3(10.0f);
+    scene.add_light(light);
+}
+
+TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
+    Scene scene;
+    build_white_box_with_glossy_floor(scene, 0.4f);
+    RenderControl control;
+    Stats stats;
+    PhotonSettings settings;
+    settings.count = 20000;
+    settings.seed = 4;
+    const PhotonMap map = trace_photons(scene, settings, control, stats);
+    ASSERT_GT(map.photons.size(), 1000u);
+    size_t on_floor = 0;
+    const glm::vec3 first = map.photons.front().power;
+    for (const Photon& p : map.photons) {
+        on_floor += (std::fabs(p.position.z) < 1e-4f && p.normal.z > 0.9f) ? 1 : 0;
+        EXPECT_EQ(p.flags, 0u) << "a glossy bounce is not specular: no caustic photons";
+        // F0 = 1 and albedo 1: the Russian roulette of both lobes keeps every power exactly the emitted one.
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.power[c], first[c], 1e-5f * first[c]);
+    }
+    EXPECT_GT(on_floor, 100u) << "photons are stored on the glossy floor";
+    EXPECT_EQ(stats.counters.at("caustic_photons_stored"), 0.0);
+}
+
+TEST(GlossyPhotons, NearSmoothGlossyIsAMirrorThatMakesCaustics) {
+    Scene scene;
+    build_white_box_with_glossy_floor(scene, 0.03f);
+    RenderControl control;
+    Stats stats;
+    PhotonSettings settings;
+    settings.count = 20000;
+    const PhotonMap map = trace_photons(scene, settings, control, stats);
+    size_t on_floor = 0;
+    for (const Photon& p : map.photons) on_floor += (std::fabs(p.position.z) < 1e-4f && p.normal.z > 0.9f) ? 1 : 0;
+    EXPECT_EQ(on_floor, 0u) << "a mirror stores no photons";
+    EXPECT_GT(stats.counters.at("caustic_photons_stored"), 1000.0);
+}
+
+// --- the pipeline --------------------------------------------------------------------------------------------
+
+// The Cornell box with a rough glossy floor, a tinted glossy back wall, a glossy ball and a glass ball.
+const Scene& glossy_cornell_box() {
+    static const Scene* scene = [] {
+        auto* s = new Scene;
+        test::build_cornell_box(*s, false);
+        const uint32_t floor = s->add_material(glossy_material("glossy_floor", glm::vec3(0.8f), 0.3f));
+        const uint32_t back = s->add_material(glossy_material("glossy_back", glm::vec3(0.9f, 0.7f, 0.4f), 0.6f));
+        const uint32_t ball = s->add_material(glossy_material("glossy_ball", glm::vec3(0.95f), 0.15f));
+        const uint32_t glass = s->add_material({"glass", MaterialKind::glass, glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
+        test::add_quad(*s, "glossy_floor", {-1, -1, 0.001f}, {1, -1, 0.001f}, {1, 1, 0.001f}, {-1, 1, 0.001f}, floor);
+        test::add_quad(*s, "glossy_back", {-1, 0.999f, 0}, {1, 0.999f, 0}, {1, 0.999f, 2}, {-1, 0.999f, 2}, back);
+        test::add_sphere(*s, "glossy_ball", {0.45f, 0.3f, 0.35f}, 0.35f, ball);
+        test::add_sphere(*s, "glass_ball", {-0.4f, -0.1f, 0.4f}, 0.35f, glass);
+        return s;
+    }();
+    return *scene;
+}
+
+RenderResult render_glossy(SplatMethod method, int size = 64) {
+    RenderSettings settings;
+    settings.photons = 20000;
+    settings.method = method;
+    settings.seed = 9;
+    RenderControl control;
+    return render(glossy_cornell_box(), test::cornell_camera(size, size), settings, control);
+}
+
+TEST(GlossyRender, ExactMethodsEqualBruteWithGlossyReceivers) {
+    const RenderResult brute = render_glossy(SplatMethod::brute);
+    for (float v : brute.indirect) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (SplatMethod method : {SplatMethod::cluster, SplatMethod::tiled, SplatMethod::cluster_cone, SplatMethod::gather}) {
+        const RenderResult other = render_glossy(method);
+        ASSERT_EQ(brute.indirect.size(), other.indirect.size());
+        size_t mismatches = 0;
+        for (size_t i = 0; i < brute.indirect.size(); ++i) {
+            const float b = brute.indirect[i], c = other.indirect[i];
+            if (!(std::fabs(b - c) <= 1e-4f * std::max(std::fabs(b), 1e-6f)) && ++mismatches <= 5)
+                ADD_FAILURE() << to_string(method) << ", component " << i << ": " << c << " vs brute " << b;
+        }
+        EXPECT_EQ(mismatches, 0u) << to_string(method);
+        EXPECT_EQ(brute.stats.counters.at("contributing_pairs"), other.stats.counters.at("contributing_pairs"))
+            << to_string(method);
+    }
+
+    // Not vacuous: glossy view samples exist and receive splatted light.
+    RenderControl control;
+    Stats stats;
+    const ViewSamples samples =
+        generate_view_samples(glossy_cornell_box(), test::cornell_camera(64, 64), ViewSampleSettings{}, control, stats);
+    size_t glossy = 0, via_glass = 0;
+    double glossy_indirect = 0.0;
+    for (const ViewSample& s : samples.samples) {
+        if (!(s.flags & kGlossy)) continue;
+        ++glossy;
+        via_glass += (s.flags & kViaSpecular) ? 1 : 0;
+        glossy_indirect += brute.indirect[3 * s.pixel] + brute.indirect[3 * s.pixel + 1];
+    }
+    EXPECT_GT(glossy, 1000u);
+    EXPECT_GT(via_glass, 10u) << "glossy samples seen through the glass ball";
+    EXPECT_GT(glossy_indirect, 0.0);
+}
+
+// The splat's per-photon shading is the BRDF of the photon's own direction: for one glossy sample and photons from
+// several directions, brute's sum equals Σ f(ωi_p, ωo) Φ_p K / N by hand.
+TEST(GlossyRender, SplatEvaluatesTheLobePerPhotonDirection) {
+    ViewSamples samples;
+    samples.width = samples.height = 1;
+    ViewSample s{};
+    s.position = glm::vec3(0.0f);
+    s.normal = s.shading_normal = glm::vec3(0, 0, 1);
+    s.wo = glm::normalize(glm::vec3(-1, 0, 1));
+    s.specular = glm::vec3(0.9f, 0.6f, 0.3f);
+    s.roughness = 0.09f;
+    s.throughput = glm::vec3(1.0f);
+    s.flags = kGlossy;
+    samples.samples.push_back(s);
+    samples.emission.assign(1, glm::vec3(0.0f));
+    samples.alpha.assign(1, 1.0f);
+    PhotonMap photons;
+    photons.emitted = 10;
+    glm::dvec3 expected(0.0);
+    for (int k = 0; k < 10; ++k) {
+        const glm::vec3 wi = glm::normalize(glm::vec3(0.2f * k - 0.5f, 0.05f * k, 1.0f));
+        photons.photons.push_back(Photon{glm::vec3(0.001f * k, 0, 0), wi, glm::vec3(0, 0, 1), glm::vec3(1.0f + k), 0});
+        expected += glm::dvec3(ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo)) * (1.0 + k);
+    }
+    SplatParams params;
+    params.radius = 0.1f;
+    params.emitted = photons.emitted;
+    RenderControl control;
+    Stats stats;
+    const std::vector<glm::vec3> out = splat_brute(samples, photons, params, control, stats);
+    expected /= kPi * 0.01 * 10.0;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(out[0][c], expected[c], 1e-5 * expected[c]);
+    // And the photon aligned with the mirror direction dominates a photon from straight above.
+    EXPECT_GT(luminance(glm::vec3(sample_brdf(s, glm::normalize(glm::vec3(1, 0, 1))))),
+              10.0f * luminance(glm::vec3(sample_brdf(s, glm::vec3(0, 0, 1)))));
+}
+
+// Five spheres of roughness 0.05 (a mirror) to 0.8 on a diffuse floor: everything finite and non-negative.
+TEST(GlossyRender, GlossySphereRowRendersFiniteAndNonNegative) {
+    Scene scene;
+    const uint32_t floor = scene.add_material({"floor", MaterialKind::diffuse, glm::vec3(0.7f), 1.45f, glm::vec3(0.0f)});
+    test::add_quad(scene, "floor", {-4, -3, 0}, {4, -3, 0}, {4, 3, 0}, {-4, 3, 0}, floor);
+    const float roughness[5] = {0.05f, 0.2f, 0.4f, 0.6f, 0.8f};
+    for (int k = 0; k < 5; ++k) {
+        const uint32_t m = scene.add_material(glossy_material("sphere", glm::vec3(0.95f, 0.8f, 0.6f), roughness[k]));
+        test::add_sphere(scene, "sphere", {-2.4f + 1.2f * k, 0.0f, 0.5f}, 0.5f, m);
+    }
+    Light light;
+    light.position = {1.0f, -2.0f, 4.0f};
+    light.value = glm::vec3(80.0f);
+    light.radius = 0.1f;
+    scene.add_light(light);
+    scene.set_background(glm::vec3(0.05f));
+    RenderSettings settings;
+    settings.photons = 20000;
+    RenderControl control;
+    const Camera camera = test::look_at({0, -6, 2}, {0, 0, 0.5f}, 128, 64, 35.0f);
+    const RenderResult r = render(scene, camera, settings, control);
+    for (float v : r.rgba) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : r.indirect) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : r.direct) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    Stats stats;
+    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    size_t glossy = 0;
+    double glossy_direct = 0.0, glossy_indirect = 0.0;
+    for (const ViewSample& s : samples.samples) {
+        if (!(s.flags & kGlossy)) continue;
+        ++glossy;
+        glossy_direct += r.direct[3 * s.pixel];
+        glossy_indirect += r.indirect[3 * s.pixel];
+    }
+    EXPECT_GT(glossy, 400u) << "four rough spheres are view samples (the smoothest one is a mirror)";
+    EXPECT_GT(glossy_direct, 0.0);
+    EXPECT_GT(glossy_indirect, 0.0) << "the floor's bounce light reaches the spheres";
+}
+
+}  // namespace

@@ -1,0 +1,62 @@
+"""Glossy materials from Python: add_material(kind="glossy", roughness=...) renders, bad roughness is refused."""
+import math
+
+import numpy as np
+import pytest
+
+import photonsplat as ps
+from scenes import quad
+
+
+def glossy_plane_scene(roughness, color=(0.9, 0.7, 0.5)):
+    """A 40 m glossy plane at z = 0 under a point light at (0, 0, 1)."""
+    scene = ps.Scene()
+    index = scene.add_material(name="metal", kind="glossy", color=color, roughness=roughness)
+    assert index == 0
+    v, t = quad((-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0))
+    scene.add_mesh(name="plane", vertices=v, triangles=t)
+    scene.add_point_light(name="lamp", position=(0, 0, 1), intensity=(50.0,) * 3)
+    return scene
+
+
+def test_glossy_plane_renders_a_highlight_at_the_mirror_point():
+    # Seen from (-2, 0, 1), the light's mirror image (0, 0, -1) lies behind the point (-1, 0, 0) of the plane:
+    # the camera looks straight at it, so the highlight is in the middle of the image.
+    camera = ps.look_at_camera(eye=(-2, 0, 1), target=(-1, 0, 0), up=(0, 0, 1), width=33, height=33,
+                               fov_y_degrees=30)
+    image, _ = ps.render(glossy_plane_scene(0.2), camera, ps.RenderSettings(photons=2000))
+    assert np.isfinite(image).all() and (image >= 0).all()
+    luminance = image[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    y, x = np.unravel_index(np.argmax(luminance), luminance.shape)
+    assert abs(y - 16) <= 1 and abs(x - 16) <= 1
+    assert luminance[y, x] > 20 * luminance[0, 0]
+
+
+def test_rougher_glossy_spreads_the_highlight():
+    camera = ps.look_at_camera(eye=(-2, 0, 1), target=(-1, 0, 0), up=(0, 0, 1), width=17, height=17,
+                               fov_y_degrees=30)
+    sharp, _ = ps.render(glossy_plane_scene(0.15), camera, ps.RenderSettings(photons=1000))
+    rough, _ = ps.render(glossy_plane_scene(0.6), camera, ps.RenderSettings(photons=1000))
+    assert sharp[8, 8, 0] > 2 * rough[8, 8, 0]
+    assert sharp[0, 8, 0] < rough[0, 8, 0]
+
+
+def test_smooth_glossy_is_a_mirror():
+    # At roughness <= 0.05 the plane is a perfect mirror: not a view sample, so no direct light on it at all.
+    camera = ps.look_at_camera(eye=(-2, 0, 1), target=(-1, 0, 0), up=(0, 0, 1), width=9, height=9,
+                               fov_y_degrees=30)
+    _, _, passes = ps.render(glossy_plane_scene(0.05), camera, ps.RenderSettings(photons=1000), passes=True)
+    assert passes["direct"].max() == 0.0
+
+
+def test_default_roughness_is_accepted_for_every_kind():
+    scene = ps.Scene()
+    for kind in ("diffuse", "mirror", "glass", "glossy"):
+        scene.add_material(name=kind, kind=kind)
+    assert scene.material_count == 4
+
+
+@pytest.mark.parametrize("roughness", [math.nan, -1.0, 2.0, math.inf])
+def test_bad_roughness_is_refused_naming_it(roughness):
+    with pytest.raises(ValueError, match="roughness"):
+        ps.Scene().add_material(name="metal", kind="glossy", roughness=roughness)

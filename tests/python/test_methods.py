@@ -1,0 +1,58 @@
+"""Every splatting method the settings offer, through the Python API: the exact ones equal the brute-force
+oracle on the same photons; the approximate one stays close; all accept both kernels and bad values fail."""
+import numpy as np
+import pytest
+
+import photonsplat as ps
+from scenes import cornell_box, cornell_camera
+
+EXACT = ("tiled", "cluster", "cluster_cone", "gather")
+
+
+def test_methods_are_the_designs():
+    assert set(ps.METHODS) == {"brute", "tiled", "cluster", "cluster_cone", "directional", "gather"}
+    assert set(ps.KERNELS) == {"uniform", "epanechnikov"}
+
+
+@pytest.fixture(scope="module")
+def box():
+    return cornell_box(), cornell_camera(40, 40)
+
+
+@pytest.mark.parametrize("kernel", ["uniform", "epanechnikov"])
+@pytest.mark.parametrize("method", EXACT)
+def test_exact_method_equals_brute(box, method, kernel):
+    scene, camera = box
+    common = dict(photons=20000, seed=5, kernel=kernel)
+    _, _, oracle = ps.render(scene, camera, ps.RenderSettings(method="brute", **common), passes=True)
+    _, stats, result = ps.render(scene, camera, ps.RenderSettings(method=method, **common), passes=True)
+    assert oracle["indirect"].sum() > 0
+    np.testing.assert_allclose(result["indirect"], oracle["indirect"], rtol=1e-4, atol=1e-6 * oracle["indirect"].max())
+    assert stats["counters"]["photon_sample_tests"] >= 0
+
+
+@pytest.mark.parametrize("radius", [1e-4, 0.05, 10.0])
+def test_exact_methods_agree_for_tiny_typical_and_huge_radii(box, radius):
+    scene, camera = box
+    images = {}
+    for method in ("brute",) + EXACT:
+        _, _, images[method] = ps.render(scene, camera, ps.RenderSettings(method=method, photons=3000, radius=radius),
+                                         passes=True)
+    for method in EXACT:
+        np.testing.assert_allclose(images[method]["indirect"], images["brute"]["indirect"], rtol=1e-4,
+                                   atol=1e-6 * max(images["brute"]["indirect"].max(), 1e-12), err_msg=method)
+
+
+def test_directional_is_close_to_exact_on_average(box):
+    scene, camera = box
+    _, _, exact = ps.render(scene, camera, ps.RenderSettings(method="cluster", photons=50000), passes=True)
+    _, _, approx = ps.render(scene, camera, ps.RenderSettings(method="directional", photons=50000), passes=True)
+    assert np.isfinite(approx["indirect"]).all() and (approx["indirect"] >= 0).all()
+    ratio = approx["indirect"].mean() / exact["indirect"].mean()
+    assert 0.8 < ratio < 1.2, ratio
+
+
+@pytest.mark.parametrize("kwargs, field", [(dict(kernel="gaussian"), "kernel"), (dict(directional_level=-2), "directional_level")])
+def test_bad_method_settings_name_the_field(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        ps.RenderSettings(**kwargs)
