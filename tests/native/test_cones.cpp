@@ -516,6 +516,25 @@ TEST(SplatClusterCone, MatchesBruteOnRandomScenes) {
     EXPECT_GT(orientation, 1000.0);
 }
 
+// A radius as large as the scene: only the cones sort photons out, so lists of a hundred photons and more meet the
+// accepts of the leaves' ancestors in one sample; still brute's sums, and the same bits on any thread count.
+TEST(SplatClusterCone, LongLeafListsWithAccepts) {
+    std::mt19937 rng(23);
+    const ViewSamples vs = random_scene(SceneOptions{}, rng);
+    const PhotonMap map = random_photons(vs, 7000, 0.5f, rng);
+    const ClusterHierarchy h = build_with_cones(vs, key_params(48, 40));
+    const SplatParams params = splat_params(1e3f, map);
+    const Outcome out = compare(vs, map, params, key_params(48, 40), "long lists");
+    EXPECT_GT(counter(out.cone, "leaf_photon_pairs"), 50.0 * double(h.leaves.size()));
+    EXPECT_GT(counter(out.cone, "node_accepts"), 0.0);
+    std::vector<glm::vec3> one, two;
+    Stats s1, s2;
+    RenderControl control;
+    tbb::task_arena(1).execute([&] { one = splat_cluster_cone(h, vs, map, params, control, s1); });
+    tbb::task_arena(2).execute([&] { two = splat_cluster_cone(h, vs, map, params, control, s2); });
+    EXPECT_TRUE(one == two) << "not bit-identical across thread counts";
+}
+
 TEST(SplatClusterCone, LargeRadiusAcceptsWholeNodesAndSavesSampleTests) {
     std::mt19937 rng(11);
     SceneOptions o;

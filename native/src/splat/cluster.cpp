@@ -420,10 +420,17 @@ private:
     // branch per outcome, and the counters are kept in registers. The stack holds nodes tested, to be opened.
     void walk_with_cones(const glm::vec3& p, const Photon& photon, Segment& segment, std::vector<uint32_t>& stack) {
         using namespace cone_tests;
-        const PhotonCone pc = photon_cone(photon.wi, photon.normal, params_.cos_normal_tolerance);
         const float reject_d2 = reject_distance_sq_, accept_d2 = accept_distance_sq_;
         const float kappa = params_.plane_distance_factor;
         const ConeNode* nodes = cone_nodes_.data();
+        // Many photons land nowhere near the visible samples (behind the camera, in other rooms): the root's
+        // distance test alone rejects them, before photon_cone's square roots and divisions in double.
+        if (distance_sq_to_box(p, nodes[hierarchy_.root].box_min, nodes[hierarchy_.root].box_max) > reject_d2) {
+            ++segment.node_tests;
+            ++segment.rejects_distance;
+            return;
+        }
+        const PhotonCone pc = photon_cone(photon.wi, photon.normal, params_.cos_normal_tolerance);
         std::vector<uint32_t>& out = segment.leaves;
         uint64_t tests = 0, far = 0, facing_away = 0, misoriented_count = 0, accepts = 0;
         stack.clear();
@@ -610,25 +617,39 @@ private:
         ++batches_;
     }
 
+    // The lists are short (a few photons per leaf on a typical frame: most of the flux arrives through accepts),
+    // so the per-sample test runs directly on them; the last pass is bound by reading the samples themselves.
     void shade_leaves(const tbb::blocked_range<size_t>& range, bool last) {
         const bool carried = !sums_.empty();
         [[maybe_unused]] const double r = params_.radius;
         uint64_t tests = 0, contributing = 0;
+        if (last) {
+            // Progress once per chunk of leaves: a shared counter bumped per leaf would bounce between cores.
+            const uint64_t shaded = leaves_shaded_.fetch_add(range.size(), std::memory_order_relaxed) + range.size();
+            control_.advance(positions_.size() + shaded, positions_.size() + hierarchy_.leaves.size());
+        }
         for (size_t l = range.begin(); l != range.end(); ++l) {
             const uint32_t leaf = hierarchy_.leaves[l];
             const uint32_t* list = list_.data() + offsets_[leaf];
             const size_t list_size = offsets_[leaf + 1] - offsets_[leaf];
             if (list_size == 0 && !last) continue;
-            control_.check();
-            if (last) {
-                const uint64_t shaded = leaves_shaded_.fetch_add(1, std::memory_order_relaxed) + 1;
-                if ((shaded & 255) == 0)
-                    control_.advance(positions_.size() + shaded, positions_.size() + hierarchy_.leaves.size());
-            }
-            const ClusterNode& node = hierarchy_.nodes[leaf];
             [[maybe_unused]] const bool accepted_here = kCones && last && accepted_.any(leaf);
+            // A leaf that nothing reached (no photon in any batch, no accept above it) would only write
+            // finish_sample(s, 0) = 0 × throughput = 0, which radiance_ already holds: skipping it spares reading
+            // its samples, much of the last pass's time where photons are sparse. (This assumes a finite
+            // throughput, a product of BSDF weights, where 0 × throughput could not be NaN.)
+            if (last && list_size == 0 && !carried && !accepted_here) continue;
+            control_.check();
+            const ClusterNode& node = hierarchy_.nodes[leaf];
             for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                 const uint32_t i = hierarchy_.sample_order[k];
+                // The samples of a leaf are scattered through views_ (pixel order): fetch a few ahead, since
+                // the loop is bound by these misses rather than by arithmetic.
+                if (k + 4 < node.sample_end) {
+                    const char* ahead = reinterpret_cast<const char*>(&views_[hierarchy_.sample_order[k + 4]]);
+                    __builtin_prefetch(ahead);
+                    __builtin_prefetch(ahead + sizeof(ViewSample) - 1);
+                }
                 const ViewSample& s = views_[i];
                 glm::dvec3 reflected_flux = carried ? sums_[k] : glm::dvec3(0.0);
                 for (size_t m = 0; m != list_size; ++m) {

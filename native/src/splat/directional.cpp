@@ -39,6 +39,9 @@
 //    kernels (kernel_weight is relative to the uniform kernel), which finish_sample's 1/(π r² N) turns into what
 //    brute gives on average. A curved facet has its centroid a little off the surface and reads a little low:
 //    that is part of the approximation, measured against brute in the tests.
+//    Cost: the per-facet bins (own and parent's) are prepared once per facet, then the samples are shaded in
+//    pixel order (sequential reads of the large view samples); a diffuse sample whose facet's normal cone shows
+//    that every bin faces it takes the bins' precomputed sum instead of the per-bin loop (equal up to rounding).
 //
 // Determinism: deposits are summed as 64-bit fixed-point integers, first per task, then into the shared bins
 // with atomic adds. Each contribution is rounded on its own and integer addition is exact, so the sums, and the
@@ -60,7 +63,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -86,6 +91,8 @@ constexpr int kBinValues = kBins * kSlots;
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 constexpr size_t kPhotonsPerTask = 2048;         // spatially sorted: a task's deposits share nodes
 constexpr size_t kCutNodesPerTask = 16;
+constexpr size_t kSamplesPerTask = 8192;
+constexpr uint32_t kPrefetch = 16;               // samples fetched ahead when gathering a node's samples
 constexpr double kMaxParentBlend = 0.5;          // β at a facet's farthest sample
 constexpr double kParentSpan = 4.0;              // blend with P only if diag(P) <= this × max(diag(n), r)
 constexpr size_t kMaxParentFacets = 256;         // and only if P holds at most this many facets
@@ -135,21 +142,42 @@ double diagonal(const ClusterNode& node) {
     return std::isfinite(d) ? d : 0.0;
 }
 
-// The diagonal of the cut node that holds the median sample, for the cut of `level`.
-double median_diagonal(const ClusterHierarchy& hierarchy, const TreeShape& t, int level) {
-    std::vector<std::pair<double, uint32_t>> sizes;  // (diagonal, samples)
-    uint64_t total = 0;
+// For every level L (0 to the root's height): whether the cut node holding the median sample of the cut of L,
+// the nodes sorted by diagonal, has a diagonal <= limit[L]. That holds exactly when the cut nodes no larger
+// than limit[L] hold at least half the samples, so no sort is needed, and one pass over the nodes serves every
+// level: a node is in the cuts of the levels from its height to its parent's height − 1 (the root: to the top).
+std::vector<bool> median_at_most(const ClusterHierarchy& hierarchy, const TreeShape& t,
+                                 const std::vector<double>& limit) {
+    const int top = t.height[hierarchy.root];
+    // Per level: the cut's samples and nodes as differences (added at a node's first level, removed after its
+    // last), and the samples and nodes within that level's limit summed directly.
+    std::vector<int64_t> total_delta(size_t(top) + 2, 0), count_delta(size_t(top) + 2, 0);
+    std::vector<uint64_t> below(size_t(top) + 1, 0), nodes_below(size_t(top) + 1, 0);
     for (const uint32_t n : t.order) {
-        if (!in_cut(t, n, level)) continue;
+        const int lo = t.height[n];
+        const int hi = t.parent[n] == kNone ? top : t.height[t.parent[n]] - 1;
+        if (hi < lo) continue;
         const ClusterNode& node = hierarchy.nodes[n];
-        sizes.emplace_back(diagonal(node), node.sample_end - node.sample_begin);
-        total += node.sample_end - node.sample_begin;
+        const uint64_t m = node.sample_end - node.sample_begin;
+        total_delta[size_t(lo)] += int64_t(m);
+        total_delta[size_t(hi) + 1] -= int64_t(m);
+        ++count_delta[size_t(lo)];
+        --count_delta[size_t(hi) + 1];
+        const double d = diagonal(node);
+        for (int level = lo; level <= hi; ++level)
+            if (d <= limit[size_t(level)]) below[size_t(level)] += m, ++nodes_below[size_t(level)];
     }
-    std::sort(sizes.begin(), sizes.end());
-    uint64_t seen = 0;
-    for (const auto& [d, m] : sizes)
-        if ((seen += m) * 2 >= total) return d;
-    return sizes.empty() ? 0.0 : sizes.back().first;
+    std::vector<bool> result(size_t(top) + 1);
+    int64_t total = 0, count = 0;
+    for (int level = 0; level <= top; ++level) {
+        total += total_delta[size_t(level)];
+        count += count_delta[size_t(level)];
+        // With no samples at all, the "median" is the smallest node (within the limit if any node is), and 0 for
+        // an empty cut.
+        result[size_t(level)] = total == 0 ? count == 0 || nodes_below[size_t(level)] > 0
+                                           : 2 * below[size_t(level)] >= uint64_t(total);
+    }
+    return result;
 }
 
 // The level to use, and whether the automatic level gives up for the exact splat.
@@ -157,9 +185,15 @@ std::pair<int, bool> choose_level(const ClusterHierarchy& hierarchy, const TreeS
     const int top = t.height[hierarchy.root];
     if (params.directional_level >= 0) return {std::min(params.directional_level, top), false};
     const double r = params.radius;
-    if (median_diagonal(hierarchy, t, 0) > kFallbackLeafDiagonal * r) return {0, true};
+    std::vector<double> limit(size_t(top) + 1, r);
+    limit[0] = kFallbackLeafDiagonal * r;
+    const std::vector<bool> leaf_small = median_at_most(hierarchy, t, limit);
+    if (!leaf_small[0]) return {0, true};
+    if (top == 0) return {0, false};
+    limit[0] = r;  // level 0 again, at r: only levels >= 1 are read below
+    const std::vector<bool> small = median_at_most(hierarchy, t, limit);
     int level = 0;
-    while (level < top && median_diagonal(hierarchy, t, level + 1) <= r) ++level;
+    while (level < top && small[size_t(level) + 1]) ++level;
     return {level, false};
 }
 
@@ -174,6 +208,7 @@ struct Facet {
     float normal_reject = kNever;  // every sample's normal is > τ from n_p when dot(axis, n_p) <= this
     float plane_reject = std::numeric_limits<float>::infinity();  // |axis·(c − p)| >= this: all beyond κ·r
     float reach = 0.0f;            // distance from the centroid to its farthest sample (for β)
+    float cone = kPi;              // half-angle of its samples' normal cone around the axis (rad)
     uint32_t samples = 0;          // m: its samples with a finite position and normal
 };
 
@@ -196,17 +231,21 @@ void frame_around(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
 bool regular(const ViewSample& s) { return is_finite(s.position) && is_finite(s.normal); }
 
 // Which of a cut node's facets a sample belongs to: the one whose axis is closest to its normal.
-uint32_t facet_of(const ViewSample& s, const Facet* facets, uint32_t count) {
-    return count == 2 && glm::dot(s.normal, facets[1].axis) > glm::dot(s.normal, facets[0].axis) ? 1 : 0;
+uint32_t facet_of(const glm::vec3& normal, const Facet* facets, uint32_t count) {
+    return count == 2 && glm::dot(normal, facets[1].axis) > glm::dot(normal, facets[0].axis) ? 1 : 0;
 }
 
-// Fills in a facet from its samples (those of `node` for which `member` holds), around a given axis.
+// A cut node's regular samples (finite position and normal), gathered once: every pass below then reads this
+// small array, which stays in cache, instead of the large view samples through sample_order again.
+struct Oriented {
+    glm::vec3 position, normal;
+};
+
+// Fills in a facet from its samples (those of `points` for which `member` holds), around a given axis.
 template <typename Member>
-void describe_facet(Facet& f, const ClusterHierarchy& hierarchy, const std::vector<ViewSample>& views,
-                    const ClusterNode& node, const SplatParams& params, Member member) {
+void describe_facet(Facet& f, const std::vector<Oriented>& points, const SplatParams& params, Member member) {
     glm::dvec3 position_sum(0.0);
-    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-        const ViewSample& s = views[hierarchy.sample_order[k]];
+    for (const Oriented& s : points) {
         if (!member(s)) continue;
         position_sum += glm::dvec3(s.position);
         ++f.samples;
@@ -217,8 +256,7 @@ void describe_facet(Facet& f, const ClusterHierarchy& hierarchy, const std::vect
     f.centroid = glm::vec3(centroid);
     frame_around(f.axis, f.tangent, f.bitangent);
     double min_cos = 1.0, slab = 0.0, reach = 0.0;
-    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-        const ViewSample& s = views[hierarchy.sample_order[k]];
+    for (const Oriented& s : points) {
         if (!member(s)) continue;
         const glm::dvec3 d = glm::dvec3(s.position) - centroid;
         const glm::dvec3 n(s.normal);
@@ -230,6 +268,7 @@ void describe_facet(Facet& f, const ClusterHierarchy& hierarchy, const std::vect
     f.reach = float(reach);
     const float theta = std::acos(float(std::clamp(min_cos, -1.0, 1.0))) + kConeInflation;
     const float tau = std::acos(std::clamp(params.cos_normal_tolerance, -1.0f, 1.0f));
+    f.cone = theta;
     if (theta < 0.5f * kPi) f.facing_reject = -std::sin(theta);
     if (theta + tau < kPi) f.normal_reject = std::cos(theta + tau);
     if (params.plane_distance_factor > 0.0f && theta < kPi)
@@ -238,37 +277,37 @@ void describe_facet(Facet& f, const ClusterHierarchy& hierarchy, const std::vect
 }
 
 // A cut node's facets: one, or two when its normals spread wider than kSplitAngle. Returns how many.
+// `points` is scratch space (reused across calls to avoid allocating per node).
 uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<ViewSample>& views,
-                           const ClusterNode& node, const SplatParams& params, Facet* out) {
+                           const ClusterNode& node, const SplatParams& params, std::vector<Oriented>& points,
+                           Facet* out) {
+    points.clear();
     glm::dvec3 normal_sum(0.0);
-    uint32_t count = 0;
     for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+        // The samples of a node are scattered over the frame's rows: fetch ahead, or each one is a cache miss.
+        if (k + kPrefetch < node.sample_end) __builtin_prefetch(&views[hierarchy.sample_order[k + kPrefetch]]);
         const ViewSample& s = views[hierarchy.sample_order[k]];
-        if (regular(s)) normal_sum += glm::dvec3(s.normal), ++count;
+        if (regular(s)) normal_sum += glm::dvec3(s.normal), points.push_back({s.position, s.normal});
     }
+    const size_t count = points.size();
     if (count == 0) return 0;
     const double length = glm::length(normal_sum);
     const glm::vec3 mean = length > 1e-3 * count ? glm::vec3(normal_sum / length) : glm::vec3(0.0f, 0.0f, 1.0f);
     // Seeds: the normal farthest from the mean, then the normal farthest from that one.
     glm::vec3 seed0 = mean, seed1 = mean;
     float lowest = 2.0f;
-    for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-        const ViewSample& s = views[hierarchy.sample_order[k]];
-        if (regular(s) && glm::dot(mean, s.normal) < lowest) lowest = glm::dot(mean, s.normal), seed0 = s.normal;
-    }
+    for (const Oriented& s : points)
+        if (glm::dot(mean, s.normal) < lowest) lowest = glm::dot(mean, s.normal), seed0 = s.normal;
     const bool split = length <= 1e-3 * count || lowest < std::cos(kSplitAngle);
+    const auto all = [](const Oriented&) { return true; };
     if (split) {
         lowest = 2.0f;
-        for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-            const ViewSample& s = views[hierarchy.sample_order[k]];
-            if (regular(s) && glm::dot(seed0, s.normal) < lowest) lowest = glm::dot(seed0, s.normal), seed1 = s.normal;
-        }
+        for (const Oriented& s : points)
+            if (glm::dot(seed0, s.normal) < lowest) lowest = glm::dot(seed0, s.normal), seed1 = s.normal;
         // One k-means step: the axes are the mean normals of the samples closer to each seed.
         glm::dvec3 sums[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
-        for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-            const ViewSample& s = views[hierarchy.sample_order[k]];
-            if (regular(s)) sums[glm::dot(s.normal, seed1) > glm::dot(s.normal, seed0) ? 1 : 0] += glm::dvec3(s.normal);
-        }
+        for (const Oriented& s : points)
+            sums[glm::dot(s.normal, seed1) > glm::dot(s.normal, seed0) ? 1 : 0] += glm::dvec3(s.normal);
         const double l0 = glm::length(sums[0]), l1 = glm::length(sums[1]);
         if (l0 > 0.0 && l1 > 0.0) {
             out[0] = Facet();
@@ -276,17 +315,18 @@ uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<
             out[0].axis = glm::vec3(sums[0] / l0);
             out[1].axis = glm::vec3(sums[1] / l1);
             for (uint32_t i = 0; i < 2; ++i)
-                describe_facet(out[i], hierarchy, views, node, params,
-                               [&](const ViewSample& s) { return regular(s) && facet_of(s, out, 2) == i; });
+                describe_facet(out[i], points, params,
+                               [&](const Oriented& s) { return facet_of(s.normal, out, 2) == i; });
             if (out[0].samples > 0 && out[1].samples > 0) return 2;
         }
     }
     out[0] = Facet();
     out[0].axis = mean;
-    describe_facet(out[0], hierarchy, views, node, params, regular);
+    describe_facet(out[0], points, params, all);
     if (length <= 1e-3 * count) {  // the normals cancel: a full cone, which never rejects
         out[0].facing_reject = out[0].normal_reject = kNever;
         out[0].plane_reject = std::numeric_limits<float>::infinity();
+        out[0].cone = kPi;
     }
     return 1;
 }
@@ -322,6 +362,20 @@ glm::dvec3 reflect_bins(const ViewSample& s, const ShadeBin* bins, int count) {
     for (int b = 0; b < count; ++b)
         if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, bins[b].direction) * bins[b].flux;
     return sum;
+}
+
+// Whether every one of `count` bins faces every sample of facet f (n_x·ω̄ > 0 for all n_x in its normal cone:
+// ω̄ within π/2 − cone of the axis, with a margin for rounding); if so, `sum` = Σ_b F_b.
+bool faces_all(const Facet& f, const ShadeBin* bins, int count, glm::dvec3& sum) {
+    constexpr float kMargin = 1e-3f;  // rad
+    sum = glm::dvec3(0.0);
+    if (!(f.cone + kMargin < 0.5f * kPi)) return false;
+    const float min_dot = std::sin(f.cone + kMargin);
+    for (int b = 0; b < count; ++b) {
+        if (!(glm::dot(f.axis, bins[b].direction) > min_dot)) return false;
+        sum += bins[b].flux;
+    }
+    return true;
 }
 
 // ---- the splat ----------------------------------------------------------------------------------------------
@@ -367,7 +421,9 @@ public:
         stats_.bytes["direction_bins"] = double(bins_.capacity() * sizeof(std::atomic<int64_t>));
         stats_.bytes["directional_nodes"] =
             double(facets_.capacity() * sizeof(Facet) + cuts_.capacity() * sizeof(Cut) +
-                   cut_of_.capacity() * sizeof(uint32_t) + shape_.parent.capacity() * sizeof(uint32_t) +
+                   cut_of_sample_.capacity() * sizeof(uint32_t) +
+                   walk_.capacity() * sizeof(WalkNode) + facet_tests_.capacity() * sizeof(FacetTest) +
+                   shape_.parent.capacity() * sizeof(uint32_t) +
                    shape_.height.capacity() * sizeof(int) + shape_.order.capacity() * sizeof(uint32_t));
         return std::move(radiance_);
     }
@@ -380,13 +436,17 @@ private:
         std::sort(cuts_.begin(), cuts_.end(), [&](const Cut& a, const Cut& b) {
             return hierarchy_.nodes[a.node].sample_begin < hierarchy_.nodes[b.node].sample_begin;
         });
-        cut_of_.assign(hierarchy_.nodes.size(), kNone);
-        for (size_t c = 0; c < cuts_.size(); ++c) cut_of_[cuts_[c].node] = uint32_t(c);
         std::vector<Facet> pairs(2 * cuts_.size());
+        cut_of_sample_.assign(views_.size(), kNone);
+        tbb::enumerable_thread_specific<std::vector<Oriented>> scratch;
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t c = r.begin(); c != r.end(); ++c)
-                cuts_[c].facet_count =
-                    describe_cut_node(hierarchy_, views_, hierarchy_.nodes[cuts_[c].node], params_, &pairs[2 * c]);
+            std::vector<Oriented>& points = scratch.local();
+            for (size_t c = r.begin(); c != r.end(); ++c) {
+                const ClusterNode& node = hierarchy_.nodes[cuts_[c].node];
+                cuts_[c].facet_count = describe_cut_node(hierarchy_, views_, node, params_, points, &pairs[2 * c]);
+                for (uint32_t k = node.sample_begin; k != node.sample_end; ++k)
+                    cut_of_sample_[hierarchy_.sample_order[k]] = uint32_t(c);
+            }
         });
         facets_.reserve(cuts_.size() + cuts_.size() / 8);
         for (size_t c = 0; c < cuts_.size(); ++c) {
@@ -398,6 +458,19 @@ private:
             if (p == kNone) continue;
             const double own = std::max(diagonal(hierarchy_.nodes[cut.node]), double(params_.radius));
             if (diagonal(hierarchy_.nodes[p]) <= kParentSpan * own) cut.parent = p;
+        }
+        // What the traversal reads, packed: a node's box and children, or for a cut node its facets; and the
+        // facets' rejection tests without the rest of Facet. Indexed like the hierarchy's nodes and facets_.
+        walk_.resize(hierarchy_.nodes.size());
+        for (size_t n = 0; n < hierarchy_.nodes.size(); ++n) {
+            const ClusterNode& node = hierarchy_.nodes[n];
+            walk_[n] = {node.box_min, node.first_child, node.box_max, node.child_count};
+        }
+        for (const Cut& cut : cuts_) walk_[cut.node].first = cut.first_facet, walk_[cut.node].count = cut.facet_count | kCutBit;
+        facet_tests_.resize(facets_.size());
+        for (size_t f = 0; f < facets_.size(); ++f) {
+            const Facet& facet = facets_[f];
+            facet_tests_[f] = {facet.centroid, facet.facing_reject, facet.axis, facet.normal_reject, facet.plane_reject};
         }
         bins_ = std::vector<std::atomic<int64_t>>(facets_.size() * kBinValues);
         for (std::atomic<int64_t>& b : bins_) b.store(0, std::memory_order_relaxed);
@@ -485,7 +558,7 @@ private:
         const float r2 = params_.radius * params_.radius;
         const float reject_box = r2 * (1.0f + 1e-5f);  // a margin, as in `cluster`: never drops a reachable node
         const bool plane_test = params_.plane_distance_factor > 0.0f;
-        const uint64_t total = positions_.size() + cuts_.size();
+        const uint64_t total = total_progress();
         std::atomic<uint64_t> done{0};
         tbb::enumerable_thread_specific<LocalBins> locals([&] {
             LocalBins local;
@@ -498,51 +571,54 @@ private:
             std::vector<uint32_t> stack;
             stack.reserve(8 * size_t(hierarchy_.depth + 1));
             uint64_t tests = 0, deposits = 0, pairs = 0;
-            for (size_t o = range.begin(); o != range.end(); ++o) {
-                const Packed& photon = packed[o];
+            // A photon at a cut node: each facet's tests, then the deposit.
+            const auto visit_facets = [&](const Packed& photon, const WalkNode& node) {
                 const glm::vec3& p = photon.position;
-                const double mean_power = (double(photon.power.x) + photon.power.y + photon.power.z) / 3.0;
+                const uint32_t first_facet = node.first, facet_count = node.count & ~kCutBit;
+                for (uint32_t f = first_facet; f != first_facet + facet_count; ++f) {
+                    ++tests;
+                    const FacetTest& facet = facet_tests_[f];
+                    const glm::vec3 d = facet.centroid - p;
+                    if (!(glm::dot(d, d) < r2)) continue;
+                    if (glm::dot(facet.axis, photon.wi) <= facet.facing_reject) continue;
+                    if (glm::dot(facet.axis, photon.normal) <= facet.normal_reject) continue;
+                    if (plane_test && !(std::fabs(glm::dot(facet.axis, d)) < facet.plane_reject)) continue;
+                    uint32_t& slot = local.slot_of[f];
+                    if (slot == kNone) {
+                        slot = uint32_t(local.touched.size());
+                        local.touched.push_back(f);
+                        local.sums.resize(local.sums.size() + kBinValues, 0);
+                    }
+                    int64_t* bin = &local.sums[size_t(slot) * kBinValues + bin_of(facets_[f], photon.wi) * kSlots];
+                    // Each contribution is rounded on its own (towards zero), so no sum depends on grouping.
+                    const double mean_power = (double(photon.power.x) + photon.power.y + photon.power.z) / 3.0;
+                    const double w = kernel_weight(d, params_) * inv_unit_;
+                    const double wm = w * mean_power;
+                    bin[0] += int64_t(w * photon.power.x);
+                    bin[1] += int64_t(w * photon.power.y);
+                    bin[2] += int64_t(w * photon.power.z);
+                    bin[3] += int64_t(wm * photon.wi.x);
+                    bin[4] += int64_t(wm * photon.wi.y);
+                    bin[5] += int64_t(wm * photon.wi.z);
+                    ++deposits;
+                    pairs += facets_[f].samples;
+                }
+            };
+            for (size_t o = range.begin(); o != range.end(); ++o) {
+                const glm::vec3& p = packed[o].position;
                 stack.push_back(hierarchy_.root);
                 while (!stack.empty()) {
                     const uint32_t index = stack.back();
                     stack.pop_back();
-                    const uint32_t c = cut_of_[index];
-                    if (c == kNone) {  // above the cut: sphere vs box, then the children
+                    const WalkNode& node = walk_[index];
+                    if (!(node.count & kCutBit)) {  // above the cut: sphere vs box, then the children
                         ++tests;
-                        const ClusterNode& node = hierarchy_.nodes[index];
                         const glm::vec3 gap = glm::max(glm::max(node.box_min - p, p - node.box_max), glm::vec3(0.0f));
                         if (glm::dot(gap, gap) > reject_box) continue;
-                        for (uint32_t k = node.child_count; k-- > 0;) stack.push_back(node.first_child + k);
+                        for (uint32_t k = node.count; k-- > 0;) stack.push_back(node.first + k);
                         continue;
                     }
-                    const Cut& cut = cuts_[c];
-                    for (uint32_t f = cut.first_facet; f != cut.first_facet + cut.facet_count; ++f) {
-                        ++tests;
-                        const Facet& facet = facets_[f];
-                        const glm::vec3 d = facet.centroid - p;
-                        if (!(glm::dot(d, d) < r2)) continue;
-                        if (glm::dot(facet.axis, photon.wi) <= facet.facing_reject) continue;
-                        if (glm::dot(facet.axis, photon.normal) <= facet.normal_reject) continue;
-                        if (plane_test && !(std::fabs(glm::dot(facet.axis, d)) < facet.plane_reject)) continue;
-                        uint32_t& slot = local.slot_of[f];
-                        if (slot == kNone) {
-                            slot = uint32_t(local.touched.size());
-                            local.touched.push_back(f);
-                            local.sums.resize(local.sums.size() + kBinValues, 0);
-                        }
-                        int64_t* bin = &local.sums[size_t(slot) * kBinValues + bin_of(facet, photon.wi) * kSlots];
-                        // Each contribution is rounded on its own (towards zero), so no sum depends on grouping.
-                        const double w = kernel_weight(d, params_) * inv_unit_;
-                        const double wm = w * mean_power;
-                        bin[0] += int64_t(w * photon.power.x);
-                        bin[1] += int64_t(w * photon.power.y);
-                        bin[2] += int64_t(w * photon.power.z);
-                        bin[3] += int64_t(wm * photon.wi.x);
-                        bin[4] += int64_t(wm * photon.wi.y);
-                        bin[5] += int64_t(wm * photon.wi.z);
-                        ++deposits;
-                        pairs += facet.samples;
-                    }
+                    visit_facets(packed[o], node);
                 }
             }
             flush(local);
@@ -562,7 +638,16 @@ private:
     // P's estimate for facet `own`: Σ m_g·(bins of g) / Σ m_g over the facets g under P whose axis is within τ of
     // own's, each bin re-binned by the world octant of its mean direction (facets' bins have different poles).
     // Returns how many bins it wrote, 0 when P has no such facet or too many facets to be worth it.
-    int parent_bins(uint32_t parent, const Facet& own, ShadeBin* out) const {
+    // Siblings usually share the parent's estimate (the same facets pass the τ test for both), and cuts are in
+    // sample order, so a task remembers the last one it computed and reuses it for the same facets of the same P.
+    struct ParentCache {
+        uint32_t parent = kNone;
+        std::vector<uint32_t> accepted, candidate;  // facets of the remembered estimate; of the one asked for
+        ShadeBin bins[kBins];
+        int count = 0;
+    };
+
+    int parent_bins(uint32_t parent, const Facet& own, ShadeBin* out, ParentCache& cache) const {
         const ClusterNode& p = hierarchy_.nodes[parent];
         const auto by_sample = [&](const Cut& cut, uint32_t sample) {
             return hierarchy_.nodes[cut.node].sample_begin < sample;
@@ -570,12 +655,15 @@ private:
         const auto first = std::lower_bound(cuts_.begin(), cuts_.end(), p.sample_begin, by_sample);
         const auto last = std::lower_bound(first, cuts_.end(), p.sample_end, by_sample);
         if (first == last || size_t(last - first) > kMaxParentFacets) return 0;
-        double sums[kBinValues] = {};
-        double weight = 0.0;
         const float cos_tau = std::clamp(params_.cos_normal_tolerance, -1.0f, 1.0f);
+        cache.candidate.clear();
         for (auto cut = first; cut != last; ++cut)
-            for (uint32_t g = cut->first_facet; g != cut->first_facet + cut->facet_count; ++g) {
-                if (!(glm::dot(facets_[g].axis, own.axis) > cos_tau)) continue;
+            for (uint32_t g = cut->first_facet; g != cut->first_facet + cut->facet_count; ++g)
+                if (glm::dot(facets_[g].axis, own.axis) > cos_tau) cache.candidate.push_back(g);
+        if (parent != cache.parent || cache.candidate != cache.accepted) {
+            double sums[kBinValues] = {};
+            double weight = 0.0;
+            for (const uint32_t g : cache.candidate) {
                 double values[kBinValues];
                 facet_values(g, values);
                 const double m = facets_[g].samples;
@@ -587,50 +675,87 @@ private:
                 }
                 weight += m;
             }
-        return weight > 0.0 ? shade_bins(sums, 1.0 / weight, out) : 0;
+            cache.parent = parent;
+            std::swap(cache.accepted, cache.candidate);
+            cache.count = weight > 0.0 ? shade_bins(sums, 1.0 / weight, cache.bins) : 0;
+        }
+        std::copy(cache.bins, cache.bins + cache.count, out);
+        return cache.count;
     }
 
+    // What shading needs of one facet: its bins and its parent's estimate, and their sums when they face all of
+    // its samples (see faces_all).
+    // Trivially constructible on purpose: the table is allocated uninitialised and every field is written by the
+    // parallel first pass, which then also takes the page faults of the fresh memory.
+    struct FacetShade {
+        ShadeBin own[kBins], parent[kBins];  // the first own_count, parent_count are set
+        glm::dvec3 own_sum, parent_sum;
+        int own_count, parent_count;
+        bool own_faces, parent_faces;
+    };
+    static_assert(std::is_trivially_default_constructible_v<FacetShade>, "allocated uninitialised");
+
+    // Two passes: the facets' shading data, cut by cut; then the samples in pixel order, which reads the large
+    // view samples and writes the radiance sequentially (walking them cut by cut, through sample_order, is a
+    // cache miss per sample and cost as much as the rest of the splat).
     void shade() {
-        const uint64_t total = positions_.size() + cuts_.size();
-        std::atomic<uint64_t> shaded{0};
+        const std::unique_ptr<FacetShade[]> shades(new FacetShade[facets_.size()]);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), kCutNodesPerTask), [&](const tbb::blocked_range<size_t>& range) {
             control_.check();
-            uint64_t evaluations = 0;
+            ParentCache cache;
             for (size_t c = range.begin(); c != range.end(); ++c) {
                 const Cut& cut = cuts_[c];
-                const Facet* facets = &facets_[cut.first_facet];
-                ShadeBin own[2][kBins], parent[2][kBins];
-                int own_count[2] = {0, 0}, parent_count[2] = {0, 0};
-                for (uint32_t f = 0; f < cut.facet_count; ++f) {
+                for (uint32_t f = cut.first_facet; f != cut.first_facet + cut.facet_count; ++f) {
+                    FacetShade& sh = shades[f];
                     double values[kBinValues];
-                    facet_values(cut.first_facet + f, values);
-                    own_count[f] = shade_bins(values, 1.0, own[f]);
-                    if (cut.parent != kNone) parent_count[f] = parent_bins(cut.parent, facets[f], parent[f]);
-                }
-                const ClusterNode& node = hierarchy_.nodes[cut.node];
-                for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
-                    const uint32_t i = hierarchy_.sample_order[k];
-                    const ViewSample& s = views_[i];
-                    if (cut.facet_count == 0 || !is_finite(s.position)) continue;  // stays 0, as in brute
-                    const uint32_t f = facet_of(s, facets, cut.facet_count);
-                    if (own_count[f] == 0 && parent_count[f] == 0) continue;
-                    glm::dvec3 flux = reflect_bins(s, own[f], own_count[f]);
-                    evaluations += own_count[f];
-                    if (parent_count[f] > 0) {
-                        const Facet& facet = facets[f];
-                        const double t =
-                            facet.reach > 0.0f ? double(glm::length(s.position - facet.centroid)) / facet.reach : 0.0;
-                        const double beta = kMaxParentBlend * std::min(1.0, t);
-                        flux = (1.0 - beta) * flux + beta * reflect_bins(s, parent[f], parent_count[f]);
-                        evaluations += parent_count[f];
-                    }
-                    radiance_[i] = finish_sample(s, flux, params_);
+                    facet_values(f, values);
+                    sh.own_count = shade_bins(values, 1.0, sh.own);
+                    sh.parent_count = cut.parent != kNone ? parent_bins(cut.parent, facets_[f], sh.parent, cache) : 0;
+                    sh.own_faces = faces_all(facets_[f], sh.own, sh.own_count, sh.own_sum);
+                    sh.parent_faces = faces_all(facets_[f], sh.parent, sh.parent_count, sh.parent_sum);
                 }
             }
+            control_.advance(positions_.size() + (progress_ += range.size()), total_progress());
+        });
+        control_.check();
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, views_.size(), kSamplesPerTask), [&](const tbb::blocked_range<size_t>& range) {
+            control_.check();
+            uint64_t evaluations = 0;
+            for (size_t i = range.begin(); i != range.end(); ++i) {
+                const uint32_t c = cut_of_sample_[i];
+                if (c == kNone) continue;  // not under the root (cannot happen for a valid hierarchy)
+                const Cut& cut = cuts_[c];
+                const ViewSample& s = views_[i];
+                if (cut.facet_count == 0 || !is_finite(s.position)) continue;  // stays 0, as in brute
+                const Facet* facets = &facets_[cut.first_facet];
+                const uint32_t f = facet_of(s.normal, facets, cut.facet_count);
+                const FacetShade& sh = shades[cut.first_facet + f];
+                if (sh.own_count == 0 && sh.parent_count == 0) continue;
+                // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
+                const bool diffuse = !(s.flags & kGlossy);
+                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, s.normal) * sh.own_sum
+                                                          : reflect_bins(s, sh.own, sh.own_count);
+                evaluations += sh.own_count;
+                if (sh.parent_count > 0) {
+                    const Facet& facet = facets[f];
+                    const double t =
+                        facet.reach > 0.0f ? double(glm::length(s.position - facet.centroid)) / facet.reach : 0.0;
+                    const double beta = kMaxParentBlend * std::min(1.0, t);
+                    const glm::dvec3 from_parent = diffuse && sh.parent_faces
+                                                       ? sample_brdf(s, s.normal) * sh.parent_sum
+                                                       : reflect_bins(s, sh.parent, sh.parent_count);
+                    flux = (1.0 - beta) * flux + beta * from_parent;
+                    evaluations += sh.parent_count;
+                }
+                radiance_[i] = finish_sample(s, flux, params_);
+            }
             bin_evaluations_ += evaluations;
-            control_.advance(positions_.size() + (shaded += range.size()), total);
+            control_.advance(positions_.size() + (progress_ += range.size()), total_progress());
         });
     }
+
+    // Progress units: photons traversed, cut nodes prepared for shading, samples shaded.
+    uint64_t total_progress() const { return positions_.size() + cuts_.size() + views_.size(); }
 
     const ClusterHierarchy& hierarchy_;
     const std::vector<ViewSample>& views_;
@@ -644,11 +769,28 @@ private:
     std::vector<glm::vec3> radiance_;
 
     std::vector<Cut> cuts_;                   // in sample order
-    std::vector<uint32_t> cut_of_;            // per hierarchy node: its index in cuts_, or kNone
     std::vector<Facet> facets_;               // cut by cut
     std::vector<std::atomic<int64_t>> bins_;  // facet × bin × value, fixed point
     double unit_ = 0.0, inv_unit_ = 0.0;
 
+    struct WalkNode {
+        glm::vec3 box_min;
+        uint32_t first;  // first child, or for a cut node (count & kCutBit) its first facet
+        glm::vec3 box_max;
+        uint32_t count;  // children, or kCutBit | facets
+    };
+    struct FacetTest {
+        glm::vec3 centroid;
+        float facing_reject;
+        glm::vec3 axis;
+        float normal_reject;
+        float plane_reject;
+    };
+    static constexpr uint32_t kCutBit = 0x80000000u;
+    std::vector<WalkNode> walk_;              // per hierarchy node
+    std::vector<FacetTest> facet_tests_;      // per facet
+    std::vector<uint32_t> cut_of_sample_;     // per view sample: the cut it lies under
+    std::atomic<uint64_t> progress_{0};
     std::atomic<uint64_t> node_tests_{0}, deposits_{0}, pairs_{0}, bin_evaluations_{0};
 };
 
