@@ -25,6 +25,8 @@
 #include "photonsplat/validation.h"
 #include "photonsplat/view_samples.h"
 
+#include "building_blocks.h"
+
 namespace ps {
 namespace {
 
@@ -108,21 +110,6 @@ void check_inputs(const ViewSamples& samples, const ClusterKeyParams& params) {
     if (samples.samples.size() >= std::numeric_limits<uint32_t>::max())
         throw InvalidInput("view samples", "too many samples for 32-bit indices");
 }
-
-struct Box {
-    glm::vec3 lo{std::numeric_limits<float>::infinity()};
-    glm::vec3 hi{-std::numeric_limits<float>::infinity()};
-    // Argument order matters: glm::min(a, b) returns a when b is NaN, so NaN positions never poison a box
-    // (they also never pass the per-sample distance test, so no box needs to contain them).
-    void add(const glm::vec3& p) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    void add(const Box& b) {
-        lo = glm::min(lo, b.lo);
-        hi = glm::max(hi, b.hi);
-    }
-};
 
 struct KeyedSample {
     uint64_t key;

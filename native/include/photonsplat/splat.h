@@ -68,6 +68,9 @@ struct SplatParams {
 // pair cap >= 1. Throws InvalidInput naming the field.
 void validate(const SplatParams& params, const PhotonMap& photons);
 
+// For the hierarchy methods: the hierarchy was built over these samples, and photon indices fit 32 bits.
+void validate(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons);
+
 // Photon positions relative to the view samples' origin: all methods splat in these coordinates.
 std::vector<glm::vec3> relative_photon_positions(const PhotonMap& photons, const glm::vec3& origin);
 

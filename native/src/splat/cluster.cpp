@@ -68,6 +68,8 @@
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
 
+#include "../building_blocks.h"
+
 namespace ps {
 namespace {
 
@@ -147,21 +149,6 @@ struct Segment {
     uint64_t rejects_distance = 0, rejects_facing = 0, rejects_orientation = 0;  // cluster_cone: also the cones'
     uint64_t accepts = 0;  // cluster_cone: accept pairs (node | kAcceptBit in `leaves`)
     size_t bytes() const { return (leaves.capacity() + ends.capacity()) * sizeof(uint32_t); }
-};
-
-// Bytes held in pair buffers and lists, and the peak of that; updated from several threads.
-class ByteMeter {
-public:
-    void add(int64_t delta) {
-        const int64_t now = held_.fetch_add(delta, std::memory_order_relaxed) + delta;
-        int64_t peak = peak_.load(std::memory_order_relaxed);
-        while (now > peak && !peak_.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
-        }
-    }
-    int64_t peak() const { return peak_.load(std::memory_order_relaxed); }
-
-private:
-    std::atomic<int64_t> held_{0}, peak_{0};
 };
 
 // What cluster_cone accepted, per node: the sum of the accepted photons' power (uniform kernel), or their moments
@@ -716,12 +703,7 @@ bool prepare(const char* method, const ClusterHierarchy& hierarchy, const ViewSa
              bool cones) {
     validate(params, photons);
     const std::vector<ViewSample>& views = samples.samples;
-    if (hierarchy.sample_order.size() != views.size())
-        throw InvalidInput("cluster hierarchy", "built over " + std::to_string(hierarchy.sample_order.size()) +
-                                                    " view samples, but " + std::to_string(views.size()) +
-                                                    " were given");
-    if (photons.photons.size() >= std::numeric_limits<uint32_t>::max())
-        throw InvalidInput("photons", "too many photons for 32-bit photon indices");
+    validate(hierarchy, samples, photons);
     if (cones && !hierarchy.empty() && !hierarchy.has_cones())
         throw InvalidInput("cluster hierarchy", std::string("built without normal cones, which the ") + method +
                                                     " method needs (ClusterBuildOptions::normal_cones)");

@@ -1,8 +1,10 @@
 // What every splatting method shares: method names, input validation, and the coordinates photons are splatted in.
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/hierarchy.h"
 #include "photonsplat/splat.h"
 
 namespace ps {
@@ -63,6 +65,15 @@ void validate(const SplatParams& params, const PhotonMap& photons) {
         throw InvalidInput("directional_level", std::to_string(params.directional_level) + " is not in [-1, 64]");
     if (params.max_pairs_in_memory == 0)
         throw InvalidInput("max_pairs_in_memory", "0 leaves no room for a single (leaf, photon) pair; use >= 1");
+}
+
+void validate(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons) {
+    if (hierarchy.sample_order.size() != samples.samples.size())
+        throw InvalidInput("cluster hierarchy", "built over " + std::to_string(hierarchy.sample_order.size()) +
+                                                    " view samples, but " + std::to_string(samples.samples.size()) +
+                                                    " were given");
+    if (photons.photons.size() >= std::numeric_limits<uint32_t>::max())
+        throw InvalidInput("photons", "too many photons for 32-bit photon indices");
 }
 
 // A float subtraction is already the exactly rounded difference, so doing it in double would not help.

@@ -801,12 +801,7 @@ std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, cons
                                          const RenderControl& control, Stats& stats) {
     validate(params, photons);
     const std::vector<ViewSample>& views = samples.samples;
-    if (hierarchy.sample_order.size() != views.size())
-        throw InvalidInput("cluster hierarchy", "built over " + std::to_string(hierarchy.sample_order.size()) +
-                                                    " view samples, but " + std::to_string(views.size()) +
-                                                    " were given");
-    if (photons.photons.size() >= std::numeric_limits<uint32_t>::max())
-        throw InvalidInput("photons", "too many photons for 32-bit photon indices");
+    validate(hierarchy, samples, photons);
     control.check();
     for (const char* name : {"photon_node_tests", "node_deposits", "photon_sample_tests", "contributing_pairs",
                              "bin_evaluations", "directional_cut_nodes", "directional_facets"})

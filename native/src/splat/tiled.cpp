@@ -63,6 +63,8 @@
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
 
+#include "../building_blocks.h"
+
 namespace ps {
 
 
@@ -182,19 +184,6 @@ struct TileBounds {
     uint32_t inside = 0;  // samples inside the frustum (with a finite position)
 };
 
-struct Box {
-    glm::vec3 lo{std::numeric_limits<float>::infinity()};
-    glm::vec3 hi{-std::numeric_limits<float>::infinity()};
-    void add(const glm::vec3& p) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    void add(const Box& b) {
-        lo = glm::min(lo, b.lo);
-        hi = glm::max(hi, b.hi);
-    }
-};
-
 // The 30-bit Morton code of p in the box (10 bits an axis).
 uint32_t morton_code(const glm::vec3& p, const Box& box) {
     auto spread = [](uint32_t v) {  // 10 bits → every third bit
@@ -219,21 +208,6 @@ uint32_t morton_code(const glm::vec3& p, const Box& box) {
     const glm::vec3 gap = glm::max(glm::max(box.lo - p, p - box.hi), glm::vec3(0.0f));
     return glm::dot(gap, gap);
 }
-
-// Bytes held by the binning buffers and lists, and their peak; updated from several threads.
-class ByteMeter {
-public:
-    void add(int64_t delta) {
-        const int64_t now = held_.fetch_add(delta, std::memory_order_relaxed) + delta;
-        int64_t peak = peak_.load(std::memory_order_relaxed);
-        while (now > peak && !peak_.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
-        }
-    }
-    int64_t peak() const { return peak_.load(std::memory_order_relaxed); }
-
-private:
-    std::atomic<int64_t> held_{0}, peak_{0};
-};
 
 template <class T>
 int64_t bytes_of(const std::vector<T>& v) {
