@@ -26,10 +26,12 @@ import math
 from pathlib import Path
 
 import bpy
+import sys
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
+from scene_kit import diffuse_material, glass_material, glossy_material, save, new_empty_scene as _new_scene  # noqa: E402
 import numpy as np
 from mathutils import Vector
 
-HERE = Path(__file__).resolve().parent
 
 # --- layout (metres) ---------------------------------------------------------------------------------------------
 HALF_X, HALF_Y = 15.0, 6.0          # column axes of the arcades: the courtyard's edge
@@ -148,6 +150,10 @@ class Parts:
         return obj
 
 
+def new_empty_scene():
+    return _new_scene(1920, 1080, "Sky", SKY, SKY_STRENGTH)
+
+
 def box(lo, hi):
     """An axis-aligned box: 8 vertices, 6 quads with outward normals."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
@@ -228,49 +234,6 @@ def scaled(template, factor):
 
 
 # --- materials ---------------------------------------------------------------------------------------------------
-
-def diffuse_material(name, color):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.0
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    material.diffuse_color = (*color, 1.0)
-    return material
-
-
-def glass_material(name, ior=1.5):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfGlass")
-    bsdf.distribution = 'SHARP'
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    bsdf.inputs["IOR"].default_value = ior
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    return material
-
-
-def glossy_material(name, color, roughness):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfGlossy")
-    bsdf.distribution = 'GGX'
-    bsdf.inputs["Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = roughness
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    material.diffuse_color = (*color, 1.0)
-    return material
-
 
 # --- the building ------------------------------------------------------------------------------------------------
 
@@ -521,28 +484,6 @@ def add_courtyard(scene, stone_light, terracotta, glass, mirror):
 
 # --- lights, camera, scene -----------------------------------------------------------------------------------------
 
-def new_empty_scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = 'CYCLES'
-    scene.render.resolution_x = 1920
-    scene.render.resolution_y = 1080
-    scene.render.resolution_percentage = 100
-    scene.view_settings.view_transform = 'Standard'
-    scene.view_settings.look = 'None'
-    scene.cycles.device = 'CPU'
-    scene.cycles.samples = 128
-    scene.cycles.use_denoising = False          # Debian's Blender has no OpenImageDenoise
-    world = bpy.data.worlds.new("Sky")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (*SKY, 1.0)
-    background.inputs["Strength"].default_value = SKY_STRENGTH
-    world.color = tuple(c * SKY_STRENGTH for c in SKY)
-    scene.world = world
-    return scene
-
-
 def add_sun(scene):
     light = bpy.data.lights.new("Sun", type='SUN')
     light.energy = SUN_STRENGTH
@@ -577,13 +518,6 @@ def add_camera(scene):
     scene.frame_start, scene.frame_end = 1, len(FLY_THROUGH)
     scene.frame_set(1)
     return obj
-
-
-def save(name):
-    path = HERE / name
-    bpy.context.preferences.filepaths.save_version = 0      # no .blend1 backup next to the committed file
-    bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True)
-    print(f"wrote {path}")
 
 
 def make_atrium():

@@ -15,8 +15,10 @@ import math
 from pathlib import Path
 
 import bpy
+import sys
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
+from scene_kit import diffuse_material, glass_material, save, new_empty_scene as _new_scene  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
 
 # Classic Cornell-box albedos (scene-linear).
 WHITE = (0.73, 0.73, 0.73)
@@ -34,54 +36,8 @@ LIGHT_RADIUS = 0.03          # metres: small, so shadows and the caustic stay sh
 
 
 def new_empty_scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = 'CYCLES'
-    scene.render.resolution_x = 512
-    scene.render.resolution_y = 512
-    scene.render.resolution_percentage = 100
-    scene.view_settings.view_transform = 'Standard'
-    scene.view_settings.look = 'None'
-    scene.cycles.device = 'CPU'
-    scene.cycles.samples = 128
-    scene.cycles.use_denoising = False          # Debian's Blender has no OpenImageDenoise
-    scene.cycles.sample_clamp_indirect = 0.0    # no clamping: keep Cycles' result unbiased for comparisons
     # A black world: the box is lit by its light only, in both engines.
-    world = bpy.data.worlds.new("Black")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    world.color = (0.0, 0.0, 0.0)
-    scene.world = world
-    return scene
-
-
-def diffuse_material(name, color):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.0      # Lambertian
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    material.diffuse_color = (*color, 1.0)            # viewport colour
-    return material
-
-
-def glass_material(name, ior=1.5):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfGlass")
-    bsdf.distribution = 'SHARP'
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.0
-    bsdf.inputs["IOR"].default_value = ior
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    return material
+    return _new_scene(512, 512, "Black", (0.0, 0.0, 0.0))
 
 
 def mirror_material(name, color=(0.9, 0.9, 0.9)):
@@ -163,13 +119,6 @@ def add_camera(scene):
     scene.collection.objects.link(obj)
     scene.camera = obj
     return obj
-
-
-def save(name):
-    path = HERE / name
-    bpy.context.preferences.filepaths.save_version = 0      # no .blend1 backup next to the committed file
-    bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True)
-    print(f"wrote {path}")
 
 
 def make_caustics():

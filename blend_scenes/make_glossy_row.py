@@ -18,9 +18,11 @@ import math
 from pathlib import Path
 
 import bpy
+import sys
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
+from scene_kit import diffuse_material, glossy_material, save, new_empty_scene as _new_scene  # noqa: E402
 from mathutils import Vector
 
-HERE = Path(__file__).resolve().parent
 
 ROUGHNESS = (0.05, 0.2, 0.35, 0.5, 0.8)
 SPHERE_RADIUS = 0.4
@@ -44,55 +46,7 @@ CAMERA_LENS = 34.0                  # mm on a 36 mm sensor
 
 
 def new_empty_scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = 'CYCLES'
-    scene.render.resolution_x = 1280
-    scene.render.resolution_y = 720
-    scene.render.resolution_percentage = 100
-    scene.view_settings.view_transform = 'Standard'
-    scene.view_settings.look = 'None'
-    scene.cycles.device = 'CPU'
-    scene.cycles.samples = 128
-    scene.cycles.use_denoising = False          # Debian's Blender has no OpenImageDenoise
-    world = bpy.data.worlds.new("Fill")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (*WORLD, 1.0)
-    world.color = WORLD
-    scene.world = world
-    return scene
-
-
-def diffuse_material(name, color):
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.0      # Lambertian
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    material.diffuse_color = (*color, 1.0)
-    return material
-
-
-def glossy_material(name, color, roughness):
-    """A metal as a plain Glossy BSDF node: GGX distribution, Roughness input set."""
-    material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfGlossy")
-    bsdf.distribution = 'GGX'
-    bsdf.inputs["Color"].default_value = (*color, 1.0)
-    bsdf.inputs["Roughness"].default_value = roughness
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(bsdf.outputs["BSDF"], output.inputs["Surface"])
-    material.diffuse_color = (*color, 1.0)
-    material.metallic = 1.0
-    material.roughness = roughness
-    return material
+    return _new_scene(1280, 720, "Fill", WORLD)
 
 
 def add_room(scene):
@@ -154,13 +108,6 @@ def add_camera(scene):
     scene.collection.objects.link(obj)
     scene.camera = obj
     return obj
-
-
-def save(name):
-    path = HERE / name
-    bpy.context.preferences.filepaths.save_version = 0      # no .blend1 backup next to the committed file
-    bpy.ops.wm.save_as_mainfile(filepath=str(path), compress=True)
-    print(f"wrote {path}")
 
 
 def make_glossy_row():
