@@ -5,100 +5,23 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <chrono>
-#include <cmath>
-#include <exception>
-#include <future>
 #include <sstream>
 #include <string>
-#include <thread>
 
+#include "arrays.h"
+#include "background.h"
+#include "bindings.h"
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
-#include "photonsplat/image.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 
 namespace py = pybind11;
 using namespace pybind11::literals;
 
+using namespace ps_py;
+
 namespace {
-
-std::string shape_of(const py::array& a) {
-    std::ostringstream s;
-    s << "(";
-    for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i);
-    s << (a.ndim() == 1 ? ",)" : ")");
-    return s.str();
-}
-
-std::string dtype_of(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
-
-// Any real floating or integer array becomes float32; anything else (strings, objects, bools) is refused.
-py::array_t<float, py::array::c_style> float_array(const py::object& obj, const std::string& field) {
-    py::array a = py::array::ensure(obj);
-    if (!a) throw ps::InvalidInput(field, "must be a numpy array (or convertible to one)");
-    const char kind = a.dtype().kind();
-    if (kind != 'f' && kind != 'i' && kind != 'u')
-        throw ps::InvalidInput(field, "must hold real numbers, got dtype " + dtype_of(a));
-    return py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
-}
-
-// Integer arrays only: a float index is almost always a bug in the caller's script.
-py::array_t<int32_t, py::array::c_style> index_array(const py::object& obj, const std::string& field) {
-    py::array a = py::array::ensure(obj);
-    if (!a) throw ps::InvalidInput(field, "must be a numpy array (or convertible to one)");
-    const char kind = a.dtype().kind();
-    if (kind != 'i' && kind != 'u') throw ps::InvalidInput(field, "must hold integers, got dtype " + dtype_of(a));
-    if (a.itemsize() > 4 || (kind == 'u' && a.itemsize() == 4)) {
-        // Wider integers: check the range before narrowing, so 2^32 + 1 does not silently become 1.
-        py::array_t<int64_t, py::array::c_style | py::array::forcecast> wide =
-            py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
-        const int64_t* p = wide.data();
-        for (py::ssize_t i = 0; i < wide.size(); ++i)
-            if (p[i] < INT32_MIN || p[i] > INT32_MAX)
-                throw ps::InvalidInput(field, "value " + std::to_string(p[i]) + " at flat index " + std::to_string(i) +
-                                                  " is out of range");
-    }
-    return py::array_t<int32_t, py::array::c_style | py::array::forcecast>::ensure(a);
-}
-
-void require_shape(const py::array& a, std::initializer_list<py::ssize_t> shape, const std::string& field,
-                   const std::string& expected) {
-    bool ok = a.ndim() == static_cast<py::ssize_t>(shape.size());
-    py::ssize_t i = 0;
-    for (py::ssize_t s : shape) {
-        if (ok && s >= 0 && a.shape(i) != s) ok = false;
-        ++i;
-    }
-    if (!ok) throw ps::InvalidInput(field, "must have shape " + expected + ", got " + shape_of(a));
-}
-
-glm::vec3 vec3(const py::object& obj, const std::string& field) {
-    py::array_t<float, py::array::c_style> a = float_array(obj, field);
-    if (a.size() != 3) throw ps::InvalidInput(field, "must have 3 components, got shape " + shape_of(a));
-    glm::vec3 v(a.data()[0], a.data()[1], a.data()[2]);
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-        throw ps::InvalidInput(field, "must be finite");
-    return v;
-}
-
-// Row-major numpy (math convention: world = M @ [x, y, z, 1]) into column-major glm.
-glm::mat4 mat4(const py::object& obj, const std::string& field) {
-    py::array_t<float, py::array::c_style> a = float_array(obj, field);
-    require_shape(a, {4, 4}, field, "(4, 4)");
-    glm::mat4 m;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c);
-    return m;
-}
-
-int positive_int(const py::object& obj, const std::string& field) {
-    if (!py::isinstance<py::int_>(obj)) throw ps::InvalidInput(field, "must be an integer");
-    const long long v = obj.cast<long long>();
-    if (v < 1 || v > 65536) throw ps::InvalidInput(field, "must be in [1, 65536], got " + std::to_string(v));
-    return static_cast<int>(v);
-}
 
 void add_mesh(ps::Scene& scene, const std::string& name, const py::object& vertices_obj,
               const py::object& triangles_obj, const py::object& normals_obj, const py::object& material_ids_obj,
@@ -156,76 +79,18 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     return s;
 }
 
-py::dict to_dict(const std::map<std::string, double>& m) {
-    py::dict d;
-    for (const auto& [k, v] : m) d[py::str(k)] = v;
-    return d;
-}
-
-py::array_t<float> image_array(const std::vector<float>& data, int height, int width, int channels) {
-    py::array_t<float> a({height, width, channels});
-    std::copy(data.begin(), data.end(), a.mutable_data());
-    return a;
-}
-
-// Runs the render on a native thread while the calling Python thread waits with the GIL released, waking
-// ~10× a second to report progress and to ask whether to cancel. All Python calls stay on the caller's thread:
-// inside Blender that is the thread allowed to call bpy (update_progress, test_break).
+// Renders one frame off the GIL (see background.h); returns (image, stats[, passes]).
 py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::RenderSettings& settings,
                   const py::object& progress, bool passes) {
     ps::validate(settings);
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        throw ps::InvalidInput("progress", "must be callable as progress(stage, fraction) or None");
-    ps::RenderControl control;
-    std::promise<ps::RenderResult> promise;
-    std::future<ps::RenderResult> done = promise.get_future();
-    std::thread worker([&] {
-        try {
-            promise.set_value(ps::render(scene, camera, settings, control));
-        } catch (...) {
-            promise.set_exception(std::current_exception());
-        }
-    });
-    // Whatever happens on this side (a callback raising, Ctrl-C), the worker is stopped and joined first.
-    auto stop_worker = [&] {
-        control.request_cancel();
-        py::gil_scoped_release release;
-        worker.join();
-    };
-    for (;;) {
-        bool finished;
-        {
-            py::gil_scoped_release release;
-            finished = done.wait_for(std::chrono::milliseconds(100)) == std::future_status::ready;
-        }
-        if (finished) break;
-        try {
-            if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-            if (!progress.is_none()) {
-                std::string stage;
-                double fraction;
-                control.progress(stage, fraction);
-                py::object answer = progress(stage, fraction);
-                if (!answer.is_none() && answer.cast<bool>()) control.request_cancel();
-            }
-        } catch (...) {
-            stop_worker();
-            throw;
-        }
-    }
-    {
-        py::gil_scoped_release release;
-        worker.join();
-    }
-    ps::RenderResult r = done.get();  // rethrows the core's exception, translated by pybind11
-    py::dict stats("seconds"_a = to_dict(r.stats.seconds), "counters"_a = to_dict(r.stats.counters),
-                   "bytes"_a = to_dict(r.stats.bytes), "values"_a = to_dict(r.stats.values));
+    const ps::RenderResult r = run_in_background<ps::RenderResult>(
+        progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, settings, control); });
     py::array_t<float> image = image_array(r.rgba, r.height, r.width, 4);
-    if (!passes) return py::make_tuple(image, stats);
+    if (!passes) return py::make_tuple(image, stats_dict(r.stats));
     py::dict components("emission"_a = image_array(r.emission, r.height, r.width, 3),
                         "direct"_a = image_array(r.direct, r.height, r.width, 3),
                         "indirect"_a = image_array(r.indirect, r.height, r.width, 3));
-    return py::make_tuple(image, stats, components);
+    return py::make_tuple(image, stats_dict(r.stats), components);
 }
 
 }  // namespace
@@ -366,16 +231,5 @@ PYBIND11_MODULE(_core, m) {
           "with passes=True also a dict of 'emission', 'direct', 'indirect' (H, W, 3). progress(stage, fraction) "
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
 
-    m.def(
-        "write_image",
-        [](const std::string& path, const py::object& image_obj) {
-            auto image = float_array(image_obj, "image");
-            if (image.ndim() != 3 || image.shape(2) < 1 || image.shape(2) > 4)
-                throw ps::InvalidInput("image", "must have shape (H, W, C) with C in 1..4, got " + shape_of(image));
-            const int h = static_cast<int>(image.shape(0)), w = static_cast<int>(image.shape(1));
-            const int c = static_cast<int>(image.shape(2));
-            py::gil_scoped_release release;
-            ps::write_image(path, image.data(), w, h, c);
-        },
-        "path"_a, "image"_a, "Writes (H, W, C) linear floats: EXR as is, PNG/JPEG clamped and sRGB-encoded.");
+    bind_images(m);
 }

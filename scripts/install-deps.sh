@@ -7,9 +7,11 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libembree-dev libtbb-dev libglm-dev
   libopenimageio-dev openimageio-tools
-  pybind11-dev python3-dev python3-numpy python3-pytest python3-skimage
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-skimage python3-matplotlib
   libgtest-dev
+  clang libclang-rt-14-dev llvm
   blender
+  xvfb xauth x11-utils imagemagick mesa-vulkan-drivers libgl1-mesa-dri
 )
 
 missing=()

@@ -1,0 +1,45 @@
+// Conversions between numpy / Python values and the core's types, shared by every file of the module.
+// Each names the field it converts, so a wrong shape or dtype is reported as "<field> must ...".
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstdint>
+#include <initializer_list>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include "photonsplat/stats.h"
+
+namespace ps_py {
+
+namespace py = pybind11;
+
+std::string shape_of(const py::array& a);
+std::string dtype_of(const py::array& a);
+
+// Any real floating or integer array becomes float32; anything else (strings, objects, bools) is refused.
+py::array_t<float, py::array::c_style> float_array(const py::object& obj, const std::string& field);
+
+// Integer arrays only: a float index is almost always a bug in the caller's script.
+py::array_t<int32_t, py::array::c_style> index_array(const py::object& obj, const std::string& field);
+
+// Shape check; -1 in `shape` matches any extent. `expected` is how the message spells the shape.
+void require_shape(const py::array& a, std::initializer_list<py::ssize_t> shape, const std::string& field,
+                   const std::string& expected);
+
+glm::vec3 vec3(const py::object& obj, const std::string& field);         // 3 finite components
+glm::mat4 mat4(const py::object& obj, const std::string& field);         // (4, 4) row-major numpy
+int positive_int(const py::object& obj, const std::string& field);       // Python int in [1, 65536]
+
+// (height, width, channels) float32 copy of a row-major buffer.
+py::array_t<float> image_array(const std::vector<float>& data, int height, int width, int channels);
+
+py::dict to_dict(const std::map<std::string, double>& m);
+py::dict stats_dict(const ps::Stats& stats);  // {"seconds", "counters", "bytes", "values"}
+
+}  // namespace ps_py

@@ -1,0 +1,10 @@
+// The module is split by area; module.cpp calls each bind_* in turn. A new area (reference renderer, metrics,
+// progressive rendering, ...) gets its own bindings/<area>.cpp and one line here and in module.cpp.
+#pragma once
+#include <pybind11/pybind11.h>
+
+namespace ps_py {
+
+void bind_images(pybind11::module_& m);  // images.cpp: write_image
+
+}  // namespace ps_py
