@@ -232,4 +232,6 @@ PYBIND11_MODULE(_core, m) {
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
 
     bind_images(m);
+    bind_metrics(m);
+    bind_reference(m);
 }
