@@ -56,7 +56,7 @@ void validate(const ReferenceSettings& s) {
 }
 
 float default_caustic_radius(const Scene& scene, uint64_t photons_per_pass) {
-    return 0.25f * default_radius(scene, photons_per_pass);
+    return 0.5f * default_radius(scene, photons_per_pass);
 }
 
 ReferenceResult render_reference(const Scene& scene, const Camera& camera, const ReferenceSettings& settings,
