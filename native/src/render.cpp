@@ -122,6 +122,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
         photon_settings.seed = settings.seed;
+        photon_settings.guide = settings.guide_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;
