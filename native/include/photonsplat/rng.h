@@ -12,6 +12,7 @@ enum class RngDomain : uint64_t {
     direct_light = 2,
     photon = 3,
     light_choice = 4,
+    emission_guide = 5,
     reference_path = 16,    // reference renderer: one camera path, keyed by pass × pixels + pixel
     reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
 };
