@@ -5,6 +5,7 @@
 
 namespace ps_py {
 
-void bind_images(pybind11::module_& m);  // images.cpp: write_image
+void bind_images(pybind11::module_& m);       // images.cpp: write_image
+void bind_translation(pybind11::module_& m);  // translation.cpp: meshes + instances, textures, spot lights
 
 }  // namespace ps_py
