@@ -167,9 +167,8 @@ def test_emissive_mesh_matches_cycles(diffuse_scene, tmp_path, core):
 
 
 def test_export_warnings_reach_the_report(caustics_scene, tmp_path, core):
-    light = bpy.data.lights["Light"]
-    light.type = 'AREA'
-    light.spread = math.radians(90.0)               # not modelled: rendered as 180 degrees, with a note
+    bpy.data.lights["Light"].type = 'AREA'
+    bpy.data.lights["Light"].spread = math.radians(90.0)               # not modelled: rendered as 180 degrees, with a note
     toon = bpy.data.materials.new("Toon")
     toon.use_nodes = True
     tree = toon.node_tree
