@@ -289,7 +289,8 @@ def test_camera_framing_matches_cycles(kind, fit, clip_end, empty_scene, tmp_pat
     empty_scene.render.engine = 'CYCLES'
     empty_scene.cycles.samples = 16
     empty_scene.cycles.use_denoising = False
-    empty_scene.render.filter_size = 0.01                        # no pixel filter: same coverage as ours
+    empty_scene.cycles.pixel_filter_type = 'BOX'                     # no pixel filter: same coverage as ours
+    empty_scene.cycles.filter_width = 0.01
     reference = render_pixels(tmp_path / "cycles.exr")[..., 0] > 0.5
     use_photonsplat(empty_scene, 48, 1000)
     empty_scene.render.resolution_y = 32
