@@ -25,7 +25,8 @@ namespace {
 
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
-                                 float plane_distance, const std::string& kernel, int directional_level) {
+                                 float plane_distance, const std::string& kernel, int directional_level,
+                                 bool guide_photons) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -38,6 +39,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.guide_photons = guide_photons;
     ps::validate(s);
     return s;
 }
@@ -169,7 +171,7 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "guide_photons"_a = true)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -185,12 +187,15 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
+                       "Emit sun photons where pilot paths found them stored; unbiased (default True)")
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
-              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level << ")";
+              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ")";
             return o.str();
         });
 

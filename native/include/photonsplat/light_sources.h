@@ -23,6 +23,11 @@ public:
     glm::vec3 flux(size_t i) const { return sources_[i].flux; }  // [W] sent into the scene
     bool is_delta(size_t i) const;                                // one shadow ray is exact
     bool is_world(size_t i) const { return sources_[i].kind == Kind::world; }  // the uniform background
+    // A sun: its photons start on a disc covering the scene, placed by sample_emission's u1, u2 (an
+    // area-preserving map), which an EmissionGuide may redistribute.
+    bool emits_from_disc(size_t i) const {
+        return sources_[i].kind == Kind::light && sources_[i].light->kind == LightKind::sun;
+    }
 
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
