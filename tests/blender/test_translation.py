@@ -157,6 +157,7 @@ def test_thousand_instances_are_one_mesh(empty_scene, tmp_path, core):
     assert scene.triangle_count == 1000 * per_sphere
     # One sphere's arrays plus one transform (and a name) per instance; realized geometry would take ~ 60 MB.
     assert scene.scene_bytes < 400_000
+    assert sorted(sum(frame.object_instances.values(), [])) == list(range(1000))
 
     use_photonsplat(empty_scene, 24, 2000)
     pixels = render_pixels(tmp_path / "instances.exr")

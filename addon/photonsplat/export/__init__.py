@@ -29,6 +29,9 @@ class ExportedFrame:
     meshes: int = 0                # distinct meshes (each stored once in the core)
     instances: int = 0             # placements of them: objects, collection / particle / geometry-node instances
     triangles: int = 0             # triangles in the world, every instance counted
+    # Original object name -> core instance ids showing it (its own mesh and every instance it generates or
+    # that shows it): what Scene.set_instance_transform needs when only transforms change.
+    object_instances: dict = field(default_factory=dict)
     lights: int = 0
     materials: int = 0
 
@@ -69,6 +72,7 @@ def export_frame(core, depsgraph, camera_override=None):
             notes.append(f"Object '{name}': {ob.type.lower()} objects are not supported yet, skipped")
 
     frame.meshes = geometry.count
+    frame.object_instances = geometry.instances_by_object
     background = world.background_radiance(depsgraph.scene_eval.world, notes)
     core_scene.set_background(radiance=background)
     if frame.lights == 0 and not table.emissive and max(background) <= 0.0:
@@ -97,6 +101,7 @@ class _GeometryTable:
         self._table = table
         self._notes = notes
         self._ids = {}                 # (data block pointer, material ids) -> (core mesh id, triangles)
+        self.instances_by_object = {}  # original object name -> [core instance id]
 
     @property
     def count(self):
@@ -116,8 +121,10 @@ class _GeometryTable:
         if mesh_id is None:
             return 0                   # no faces (only loose edges or points): nothing to hit
         visibility = _ray_visibility(ob)
-        self._core_scene.add_instance(mesh_id=mesh_id, transform=camera.matrix_to_numpy(instance.matrix_world),
-                                      name=name, **visibility)
+        instance_id = self._core_scene.add_instance(mesh_id=mesh_id,
+                                                    transform=camera.matrix_to_numpy(instance.matrix_world),
+                                                    name=name, **visibility)
+        self.instances_by_object.setdefault(ob.original.name_full, []).append(instance_id)
         return triangles
 
     def _add_mesh(self, ob, name, slots):
