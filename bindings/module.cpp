@@ -23,43 +23,6 @@ using namespace ps_py;
 
 namespace {
 
-void add_mesh(ps::Scene& scene, const std::string& name, const py::object& vertices_obj,
-              const py::object& triangles_obj, const py::object& normals_obj, const py::object& material_ids_obj,
-              const py::object& transform_obj) {
-    const std::string where = "mesh '" + name + "'";
-    auto vertices = float_array(vertices_obj, where + ".vertices");
-    require_shape(vertices, {-1, 3}, where + ".vertices", "(N, 3)");
-    auto triangles = index_array(triangles_obj, where + ".triangles");
-    require_shape(triangles, {-1, 3}, where + ".triangles", "(M, 3)");
-    ps::MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = vertices.data();
-    mesh.vertex_count = static_cast<size_t>(vertices.shape(0));
-    mesh.triangles = triangles.data();
-    mesh.triangle_count = static_cast<size_t>(triangles.shape(0));
-    py::array_t<float, py::array::c_style> normals;
-    if (!normals_obj.is_none()) {
-        normals = float_array(normals_obj, where + ".normals");
-        if (normals.ndim() == 3) {
-            require_shape(normals, {static_cast<py::ssize_t>(mesh.triangle_count), 3, 3}, where + ".normals",
-                          "(M, 3, 3) per corner or (N, 3) per vertex");
-            mesh.normals_per_corner = true;
-        } else {
-            require_shape(normals, {static_cast<py::ssize_t>(mesh.vertex_count), 3}, where + ".normals",
-                          "(N, 3) per vertex or (M, 3, 3) per corner");
-        }
-        mesh.normals = normals.data();
-    }
-    py::array_t<int32_t, py::array::c_style> material_ids;
-    if (!material_ids_obj.is_none()) {
-        material_ids = index_array(material_ids_obj, where + ".material_ids");
-        require_shape(material_ids, {static_cast<py::ssize_t>(mesh.triangle_count)}, where + ".material_ids", "(M,)");
-        mesh.material_ids = material_ids.data();
-    }
-    if (!transform_obj.is_none()) mesh.transform = mat4(transform_obj, where + ".transform");
-    scene.add_mesh(mesh);  // validates values: NaN, index ranges, material ids
-}
-
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
@@ -119,7 +82,7 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
-               const py::object& emission, float roughness) {
+               const py::object& emission, float roughness, int texture, bool holdout) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
@@ -127,16 +90,16 @@ PYBIND11_MODULE(_core, m) {
                 mat.ior = ior;
                 mat.emission = vec3(emission, "material '" + name + "'.emission");
                 mat.roughness = roughness;  // validated by the core: finite, in [0, 1]
+                mat.texture = texture;      // validated by the scene: -1 or an existing texture
+                mat.holdout = holdout;
                 return s.add_material(mat);
             },
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
-            "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f,
+            "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f, "texture"_a = -1, "holdout"_a = false,
             "Adds a material ('diffuse', 'mirror', 'glass' or 'glossy'); returns its index for material_ids. "
-            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror.")
-        .def("add_mesh", &add_mesh, "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(),
-             "material_ids"_a = py::none(), "transform"_a = py::none(),
-             "Adds a triangle mesh: vertices (N,3), triangles (M,3), optional normals (N,3) or (M,3,3), "
-             "material_ids (M,), transform (4,4) row-major object-to-world.")
+            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror. "
+            "texture: index of add_texture() whose colour at the hit's UV replaces color (-1: none). "
+            "holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,
@@ -167,7 +130,7 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_area_light",
             [](ps::Scene& s, const std::string& name, const py::object& center, const py::object& axis_u,
-               const py::object& axis_v, const py::object& radiance) {
+               const py::object& axis_v, const py::object& radiance, const std::string& shape) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::area;
@@ -175,14 +138,20 @@ PYBIND11_MODULE(_core, m) {
                 l.axis_u = vec3(axis_u, "area light '" + name + "'.axis_u");
                 l.axis_v = vec3(axis_v, "area light '" + name + "'.axis_v");
                 l.value = vec3(radiance, "area light '" + name + "'.radiance");
+                if (shape != "rectangle" && shape != "ellipse")
+                    throw ps::InvalidInput("area light '" + name + "'.shape",
+                                           "must be 'rectangle' or 'ellipse', got '" + shape + "'");
+                l.ellipse = shape == "ellipse";
                 s.add_light(l);
             },
-            "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a,
-            "One-sided rectangle with full edge vectors u, v, emitting radiance towards cross(u, v).")
+            "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a, "shape"_a = "rectangle",
+            "One-sided rectangle with full edge vectors u, v (or, shape='ellipse', the ellipse inscribed in it), "
+            "emitting radiance towards cross(u, v).")
         .def(
             "set_background", [](ps::Scene& s, const py::object& radiance) { s.set_background(vec3(radiance, "background")); },
             "radiance"_a)
-        .def_property_readonly("triangle_count", [](const ps::Scene& s) { return s.triangles().size(); })
+        .def_property_readonly("triangle_count", &ps::Scene::triangle_count,
+                               "Triangles in the world: each instance counts its mesh's.")
         .def_property_readonly("dropped_triangles", &ps::Scene::dropped_triangles,
                                "Degenerate (zero-area) triangles dropped on entry.")
         .def_property_readonly("material_count", [](const ps::Scene& s) { return s.materials().size(); })
@@ -239,4 +208,5 @@ PYBIND11_MODULE(_core, m) {
     bind_images(m);
     bind_metrics(m);
     bind_reference(m);
+    bind_translation(m);
 }

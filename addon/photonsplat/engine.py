@@ -60,7 +60,11 @@ last_outcome = RenderOutcome()
 class PhotonSplatRenderEngine(bpy.types.RenderEngine):
     bl_idname = "PHOTONSPLAT"
     bl_label = "Photon Splat"
-    bl_use_preview = False               # no fast material-preview path yet
+    # Material/world/light preview thumbnails stay off on purpose: Blender 3.4 re-renders them in a job on every
+    # edit and for every thumbnail, and each would be a full photon render of the preview .blend (whose checker
+    # floor and world we only approximate, with notes). The Material Preview shading mode uses EEVEE
+    # (bl_use_eevee_viewport). See docs/translation.md.
+    bl_use_preview = False
     bl_use_eevee_viewport = True         # Material Preview stays EEVEE
     bl_use_shading_nodes_custom = False  # keep Cycles' shader nodes and the Shader Editor
     bl_use_postprocess = True            # let the compositor run on our result

@@ -59,7 +59,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     bool only_specular_so_far = true;
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
-        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) return;
+        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit);
         const Material& m = *s.material;
         if (m.is_specular()) {
@@ -91,9 +91,9 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             ray = Ray{offset_ray_origin(s.position, s.geometric_normal), step.direction};
             continue;
         }
-        const float keep = std::max({m.color.x, m.color.y, m.color.z});
+        const float keep = std::max({s.color.x, s.color.y, s.color.z});
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-        power *= m.color / keep;
+        power *= s.color / keep;
         const float v1 = rng.uniform(), v2 = rng.uniform();
         const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
         if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below the surface
@@ -148,7 +148,7 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     map.emitted = settings.count;
     const LightSources sources(scene);
     const SourceChoice choice = choose_sources_by_power(sources);
-    if (choice.cdf.empty() || settings.count == 0 || scene.triangles().empty()) return map;
+    if (choice.cdf.empty() || settings.count == 0 || scene.triangle_count() == 0) return map;
 
     scene.ray_tracer();
     std::vector<EmissionGuide> guides(sources.size());

@@ -91,7 +91,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = width;
     stats.values["height"] = height;
-    stats.counters["triangles"] = static_cast<double>(scene.triangles().size());
+    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
     stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
     stats.counters["lights"] = static_cast<double>(scene.lights().size());
 

@@ -35,12 +35,17 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
     glm::vec3 throughput(1.0f);
     for (int depth = 0;; ++depth) {
         Hit hit;
-        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) {
+        // The first segment sees what is visible to the camera, up to its far clip; later ones what is visible
+        // to indirect rays.
+        const bool first = depth == 0;
+        if (!tracer.intersect(ray, 0.0f, first ? camera.far_distance(ray) : std::numeric_limits<float>::infinity(),
+                              hit, first ? kCameraRays : kIndirectRays)) {
             emitted += throughput * scene.background();
             return false;
         }
         const SurfacePoint s = surface_at(scene, ray, hit);
-        if (depth == 0) {
+        if (first) {
+            if (s.material->holdout) return false;  // cut out: alpha stays 0, nothing is added
             alpha = 1.0f;
             sample.depth = camera.view_depth(s.position);
         }
@@ -55,7 +60,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
             if (s.material->is_glossy()) {
                 // A pure GGX lobe (no diffuse part): F0 = colour, α = roughness².
                 sample.albedo = glm::vec3(0.0f);
-                sample.specular = s.material->color;
+                sample.specular = s.color;
                 sample.roughness = s.material->glossy_alpha();
                 sample.flags |= kGlossy;
                 // Where interpolation tilts the shading normal away from the viewer (silhouettes of smooth
@@ -64,7 +69,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
                 if (!(glm::dot(sample.shading_normal, sample.wo) > kMinGlossyCosine))
                     sample.shading_normal = sample.normal;
             } else {
-                sample.albedo = s.material->color;
+                sample.albedo = s.color;
                 sample.specular = glm::vec3(0.0f);
                 sample.roughness = 0.0f;
             }

@@ -75,7 +75,7 @@ TEST(Reference, EmissivePdfAgreesWithEmitterSampling) {
         const RayTracer& tracer = scene.ray_tracer();
         Hit hit;
         ASSERT_TRUE(tracer.intersect(Ray{x, in.wi}, 0.0f, 100.0f, hit));
-        EXPECT_NEAR(sources.emissive_pdf(hit.triangle, x, x + hit.t * in.wi) / in.pdf, 1.0, 1e-3);
+        EXPECT_NEAR(sources.emissive_pdf(hit.instance, hit.triangle, x, x + hit.t * in.wi) / in.pdf, 1.0, 1e-3);
     }
 }
 

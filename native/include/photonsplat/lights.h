@@ -10,7 +10,9 @@ namespace ps {
 enum class LightKind {
     point,  // isotropic intensity I [W/sr]; a sphere of `radius` for soft shadows (0 = a true point)
     sun,    // distant light, irradiance E [W/m²] on a surface facing it; `angle` = full angular diameter
-    area,   // one-sided rectangle emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
+    area,   // one-sided rectangle (or ellipse) emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
+    spot,   // a point light (intensity I on the axis, `radius`) restricted to a cone around `direction`, with
+            // Cycles 3.4's falloff: I(θ) = I · cos θ · smoothstep((cos θ − cos(size/2)) / ((1 − cos(size/2))·blend))
 };
 
 struct Light {
@@ -18,14 +20,19 @@ struct Light {
     LightKind kind = LightKind::point;
     glm::vec3 value{0.0f};       // point: intensity; sun: irradiance; area: radiance (RGB)
     glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle
-    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels (unit)
-    float radius = 0.0f;         // point only, >= 0
+    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels; spot: the cone's axis (unit)
+    float radius = 0.0f;         // point and spot, >= 0
     float angle = 0.0f;          // sun only, full angular diameter in radians, in [0, π)
     glm::vec3 axis_u{1.0f, 0.0f, 0.0f};  // area: full edge vectors (object scale included)
     glm::vec3 axis_v{0.0f, 1.0f, 0.0f};
+    bool ellipse = false;        // area: the ellipse (disk) inscribed in the rectangle instead of the rectangle
+    float spot_size = 0.0f;      // spot: full cone angle in radians, in (0, π]
+    float spot_blend = 0.0f;     // spot: softness of the cone's edge, in [0, 1]
 
     glm::vec3 area_normal() const;  // unit normal of the emitting side of an area light
-    float area() const;             // area light surface area
+    float area() const;             // area light surface area (π/4 of the rectangle's for an ellipse)
+    // Spot only: the falloff factor cos θ · smoothstep(...) for a unit direction leaving the light (0 outside).
+    float spot_attenuation(const glm::vec3& outgoing) const;
 };
 
 const char* to_string(LightKind kind);

@@ -47,7 +47,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
     }
     bool any_specular = false;
     for (const Material& m : scene.materials()) any_specular = any_specular || m.is_specular();
-    if (which.empty() || !any_specular || count == 0 || scene.triangles().empty()) return out;
+    if (which.empty() || !any_specular || count == 0 || scene.triangle_count() == 0) return out;
     stats.counters["caustic_photons_emitted"] += static_cast<double>(count);
 
     const RayTracer& tracer = scene.ray_tracer();

@@ -164,7 +164,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         if (m.emission != glm::vec3(0.0f)) {
             // Emissive triangles are one source of the path tracer (never photon-mapped).
             const float light_pdf =
-                last.nonspecular && !last.specular_since ? c.sources.emissive_pdf(hit.triangle, last.x, s.position) : 0.0f;
+                last.nonspecular && !last.specular_since ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) : 0.0f;
             radiance += throughput * m.emission * light_weight(last, false, light_pdf);
         }
         if (m.is_specular()) {

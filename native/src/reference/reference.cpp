@@ -83,7 +83,7 @@ ReferenceResult render_reference(const Scene& scene, const Camera& camera, const
     stats.values["max_bounces"] = settings.max_bounces;
     stats.values["width"] = width;
     stats.values["height"] = height;
-    stats.counters["triangles"] = static_cast<double>(scene.triangles().size());
+    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
     stats.counters["lights"] = static_cast<double>(scene.lights().size());
 
     std::vector<glm::dvec3> sum(pixels, glm::dvec3(0.0));
