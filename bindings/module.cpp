@@ -62,7 +62,8 @@ void add_mesh(ps::Scene& scene, const std::string& name, const py::object& verti
 
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
-                                 float plane_distance, const std::string& kernel, int directional_level) {
+                                 float plane_distance, const std::string& kernel, int directional_level,
+                                 bool caustics_pass, bool transparent) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -75,6 +76,8 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.caustics_pass = caustics_pass;
+    s.transparent = transparent;
     ps::validate(s);
     return s;
 }
@@ -89,7 +92,10 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
     if (!passes) return py::make_tuple(image, stats_dict(r.stats));
     py::dict components("emission"_a = image_array(r.emission, r.height, r.width, 3),
                         "direct"_a = image_array(r.direct, r.height, r.width, 3),
-                        "indirect"_a = image_array(r.indirect, r.height, r.width, 3));
+                        "indirect"_a = image_array(r.indirect, r.height, r.width, 3),
+                        "normal"_a = image_array(r.normal, r.height, r.width, 3),
+                        "depth"_a = image_array(r.depth, r.height, r.width, 1));
+    if (settings.caustics_pass) components["caustics"] = image_array(r.caustics, r.height, r.width, 3);
     return py::make_tuple(image, stats_dict(r.stats), components);
 }
 
@@ -200,7 +206,8 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1,
+             "caustics_pass"_a = false, "transparent"_a = false)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -216,19 +223,26 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
+                       "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
+        .def_readwrite("transparent", &ps::RenderSettings::transparent,
+                       "Film transparency: alpha 0 and no background where camera rays escape to the world")
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
-              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level << ")";
+              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
+              << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
+              << ", transparent=" << (s.transparent ? "True" : "False") << ")";
             return o.str();
         });
 
     m.def("render", &render, "scene"_a, "camera"_a, "settings"_a = ps::RenderSettings(), "progress"_a = py::none(),
           "passes"_a = false,
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
-          "with passes=True also a dict of 'emission', 'direct', 'indirect' (H, W, 3). progress(stage, fraction) "
+          "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
+          "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
 
     bind_images(m);

@@ -16,9 +16,8 @@ import traceback
 from dataclasses import dataclass, field
 
 import bpy
-import numpy as np
 
-from . import export
+from . import export, passes
 
 # Warnings beyond this many are summarised in one line: a scene with 500 odd materials should not bury
 # the render report.
@@ -52,6 +51,7 @@ class RenderOutcome:
     warnings: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
     seconds: float = 0.0
+    passes: list = field(default_factory=list)   # names of the passes written
 
 
 last_outcome = RenderOutcome()
@@ -65,9 +65,42 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
     bl_use_shading_nodes_custom = False  # keep Cycles' shader nodes and the Shader Editor
     bl_use_postprocess = True            # let the compositor run on our result
 
+    # --- viewport (Rendered shading): viewport.py does the work, off the main thread ----------------------
+    _viewport = None
+
+    def view_update(self, context, depsgraph):
+        try:
+            if self._viewport is None:
+                from . import viewport
+                self._viewport = viewport.ViewportSession(load_core())
+            self._viewport.update(self, depsgraph)
+        except CoreUnavailable as error:
+            self.update_stats("", f"Photon Splat | {error}")
+        except Exception:            # never into Blender's draw loop
+            traceback.print_exc()
+
+    def view_draw(self, context, depsgraph):
+        if self._viewport is None:
+            return
+        try:
+            self._viewport.draw(self, context, depsgraph)
+        except Exception:
+            traceback.print_exc()
+
+    def __del__(self):
+        # Blender frees the engine when the viewport leaves Rendered mode or closes: stop its rendering.
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:
+            viewport.stop()
+
+    # --- final render ---------------------------------------------------------------------------------------
+    def update_render_passes(self, scene=None, renderlayer=None):
+        passes.register_passes(self, scene, renderlayer)
+
     def render(self, depsgraph):
         global last_outcome
         started = time.perf_counter()
+        # The whole frame: with a render border Blender hands back a result of the border's size only.
         width, height = export.camera.resolution(depsgraph.scene)
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         outcome = RenderOutcome()
@@ -89,6 +122,9 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         core = load_core()
         self.update_stats("", "Photon Splat | Exporting scene")
         frame = export.export_frame(core, depsgraph, camera_override=self.camera_override)
+        view_layer = depsgraph.view_layer
+        frame.settings.transparent = depsgraph.scene.render.film_transparent
+        frame.settings.caustics_pass = view_layer.photonsplat.use_pass_caustics
         outcome.warnings = frame.warnings
         self._report_warnings(frame.warnings)
         if self._cancel_requested():
@@ -100,19 +136,23 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
             self.update_stats("", f"Photon Splat | {stage} {100.0 * fraction:.0f}%")
             return self._cancel_requested()
 
+        components = None
         try:
-            image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+            if passes.needs_components(view_layer):
+                image, stats, components = core.render(frame.scene, frame.camera, frame.settings,
+                                                       progress=on_progress, passes=True)
+            else:
+                image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
         except core.Cancelled:
             self._cancelled(outcome)
             return
 
-        image = np.asarray(image, dtype=np.float32)
-        if image.shape != (frame.height, frame.width, 4):
-            raise RuntimeError(f"the core returned an image of shape {image.shape}, "
-                               f"expected {(frame.height, frame.width, 4)}")
-        # The core's row 0 is the top of the image; Blender's is the bottom.
-        pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
-        result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+        layer = result.layers[0]
+        combined = layer.passes["Combined"]
+        if len(combined.rect) != frame.width * frame.height:
+            raise RuntimeError(f"Blender's result holds {len(combined.rect)} pixels, the render "
+                               f"{frame.width}x{frame.height}: the render border was read differently")
+        outcome.passes = passes.write_passes(layer, image, components, frame.width, frame.height)
 
         outcome.status = "finished"
         outcome.stats = stats
@@ -157,8 +197,12 @@ def _summary(frame, stats, photons):
 
 
 def register():
+    from . import viewport
     bpy.utils.register_class(PhotonSplatRenderEngine)
+    viewport.register()
 
 
 def unregister():
+    from . import viewport
+    viewport.unregister()        # stops every viewport's thread before the class goes
     bpy.utils.unregister_class(PhotonSplatRenderEngine)

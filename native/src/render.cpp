@@ -39,8 +39,9 @@ std::string gib(double bytes) {
 // killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
 void check_memory(const Camera& camera, uint64_t photons) {
     const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag + direct + indirect + RGBA and the three passes
-    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 12 + 12 + 16 + 36);
+    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
+    // the passes, normal and depth
+    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16);
     const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
     const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
     if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
@@ -131,20 +132,34 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         params.emitted = std::max<uint64_t>(photons.emitted, 1);
         params.kernel = settings.kernel;
         params.directional_level = settings.directional_level;
-        std::vector<glm::vec3> indirect;
+        // The caustics pass splats the caustic photons a second time, alone, over the same view samples and
+        // hierarchy: exact (the same estimate restricted to those photons), and free when the pass is off.
+        PhotonMap caustic_photons;
+        if (settings.caustics_pass) {
+            caustic_photons.emitted = photons.emitted;
+            for (const Photon& p : photons.photons)
+                if (p.flags & kCaustic) caustic_photons.photons.push_back(p);
+        }
+        const double splat_end = settings.caustics_pass ? 0.9 : 0.98;
+        std::vector<glm::vec3> indirect, caustic;
         const std::string splat_stage = std::string("splat (") + to_string(settings.method) + ")";
         switch (settings.method) {
             case SplatMethod::brute:
             case SplatMethod::tiled:
             case SplatMethod::gather: {
-                control.begin_stage(splat_stage, 0.45, 0.98);
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::brute) return splat_brute(samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::tiled)
+                        return splat_tiled(samples, camera, map, params, control, stats);
+                    return splat_gather(samples, map, params, control, stats);
+                };
+                control.begin_stage(splat_stage, 0.45, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::brute)
-                    indirect = splat_brute(samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::tiled)
-                    indirect = splat_tiled(samples, camera, photons, params, control, stats);
-                else
-                    indirect = splat_gather(samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
             case SplatMethod::cluster:
@@ -162,14 +177,20 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();
-                control.begin_stage(splat_stage, 0.5, 0.98);
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::cluster)
+                        return splat_cluster(hierarchy, samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::cluster_cone)
+                        return splat_cluster_cone(hierarchy, samples, map, params, control, stats);
+                    return splat_directional(hierarchy, samples, map, params, control, stats);
+                };
+                control.begin_stage(splat_stage, 0.5, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::cluster)
-                    indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::cluster_cone)
-                    indirect = splat_cluster_cone(hierarchy, samples, photons, params, control, stats);
-                else
-                    indirect = splat_directional(hierarchy, samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
         }
@@ -183,21 +204,35 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         result.emission.assign(pixels * 3, 0.0f);
         result.direct.assign(pixels * 3, 0.0f);
         result.indirect.assign(pixels * 3, 0.0f);
-        for (size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+        if (settings.caustics_pass) result.caustics.assign(pixels * 3, 0.0f);
+        result.normal.assign(pixels * 3, 0.0f);
+        result.depth.assign(pixels, RenderResult::kNoDepth);
+        for (size_t p = 0; p < pixels; ++p) {
+            // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles):
+            // the background seen through glass or in mirrors stays.
+            const bool escaped = samples.alpha[p] == 0.0f;
+            if (!(settings.transparent && escaped))
+                for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+            if (!escaped) {
+                for (int c = 0; c < 3; ++c) result.normal[3 * p + c] = samples.first_normal[p][c];
+                result.depth[p] = samples.first_depth[p];
+            }
+        }
         for (size_t i = 0; i < samples.samples.size(); ++i) {
             const size_t p = samples.samples[i].pixel;
             for (int c = 0; c < 3; ++c) {
                 result.direct[3 * p + c] = direct[i][c];
                 result.indirect[3 * p + c] = indirect[i][c];
+                if (settings.caustics_pass) result.caustics[3 * p + c] = caustic[i][c];
             }
         }
         for (size_t p = 0; p < pixels; ++p) {
             for (int c = 0; c < 3; ++c)
                 result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
-            result.rgba[4 * p + 3] = 1.0f;  // film transparency is not offered yet: the background is opaque
+            result.rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
         }
-        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
+        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size() + result.caustics.size() +
+                                                    result.normal.size() + result.depth.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);
     return result;

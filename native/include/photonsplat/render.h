@@ -24,6 +24,8 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
+    bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
+    bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
 };
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field
@@ -36,6 +38,12 @@ struct RenderResult {
     std::vector<float> rgba;   // height × width × 4, linear radiance, row 0 = TOP of the image
     // Per-pixel components, height × width × 3 each; rgba = emission + direct + indirect.
     std::vector<float> emission, direct, indirect;
+    // The part of `indirect` carried by caustic photons (height × width × 3); empty unless settings.caustics_pass.
+    std::vector<float> caustics;
+    // First camera hit, as Cycles' passes: world-space normal (height × width × 3, 0 where nothing was hit) and
+    // depth along the camera axis (height × width, kNoDepth where nothing was hit).
+    std::vector<float> normal, depth;
+    static constexpr float kNoDepth = 1e10f;  // Cycles' depth of the background
     Stats stats;
 };
 

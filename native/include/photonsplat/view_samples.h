@@ -39,6 +39,9 @@ struct ViewSamples {
     std::vector<ViewSample> samples;    // at most one per pixel, in pixel order
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
+    // Of the FIRST surface each camera ray hits (glass and mirrors included), as Cycles' Normal and Depth passes:
+    std::vector<glm::vec3> first_normal;  // width × height: world-space shading normal facing the camera; 0 if none
+    std::vector<float> first_depth;       // width × height: view depth along the camera axis; 0 if the ray escaped
 
     size_t bytes() const;
 };
