@@ -9,6 +9,7 @@ The rendering itself runs in refine.Refinement's thread; it asks Blender for a r
 Every session is listed here so that unregistering the add-on or loading a file stops all of them.
 """
 
+import collections
 import time
 import weakref
 
@@ -81,21 +82,29 @@ class ViewportSession:
         self._texture = None
         self._texture_version = None
         self._engine = None
+        self.restarts = 0             # refinements started so far (numbers them)
+        # (time.perf_counter(), restart number, passes) each time view_draw shows a new image: how long a
+        # change takes to reach the screen (tools/viewport_timing.py reads it).
+        self.draw_log = collections.deque(maxlen=1024)
         _sessions.add(self)
 
     # --- view_update ------------------------------------------------------------------------------------
     def update(self, engine, depsgraph):
         self._engine = weakref.ref(engine)
         try:
-            self.settings = refine_settings(self.core, depsgraph.scene)
+            settings = refine_settings(self.core, depsgraph.scene)
             self.last_sync = self.cache.sync(depsgraph)
+            changed = self.last_sync.changed or self.scene is None or settings != self.settings
+            self.settings = settings
             if self.last_sync.changed or self.scene is None:
                 self.scene = self.cache.build(self.core)
             self.error = None
         except (ValueError, export.ExportError) as error:
             self.error = str(error)
             self.scene = None
-        self.restart()
+            changed = True
+        if changed:               # selection and other changes that do not show restart nothing
+            self.restart()
 
     # --- view_draw --------------------------------------------------------------------------------------
     def draw(self, engine, context, depsgraph):
@@ -107,13 +116,15 @@ class ViewportSession:
             self.restart()
         self._status(engine)
         frame = self.refinement.latest() if self.refinement else None
-        if frame is None:
-            return
-        if self._texture_version != (id(self.refinement), frame.version):
+        if frame is not None and self._texture_version != (self.restarts, frame.version):
             height, width = frame.pixels.shape[:2]
             buffer = gpu.types.Buffer('FLOAT', width * height * 4, frame.pixels.reshape(-1))
             self._texture = gpu.types.GPUTexture((width, height), format='RGBA16F', data=buffer)
-            self._texture_version = (id(self.refinement), frame.version)
+            self._texture_version = (self.restarts, frame.version)
+            self.draw_log.append((time.perf_counter(), self.restarts, frame.passes))
+        if self._texture is None:
+            return
+        # Until the first image of a restarted refinement arrives, the previous image stays on screen.
         # Linear, premultiplied pixels: Blender's display transform (view transform, look, exposure) is applied
         # through the display-space shader, as for Cycles.
         gpu.state.blend_set('ALPHA_PREMULT')
@@ -151,6 +162,7 @@ class ViewportSession:
         if self.scene is None or self._make_camera is None or self.settings is None:
             return
         width, height = self._view[2], self._view[3]
+        self.restarts += 1
         self.refinement = refine.Refinement(self.core, self.scene, self._make_camera, width, height,
                                             self.settings, on_frame=self._redraw).start()
 
