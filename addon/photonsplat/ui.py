@@ -134,7 +134,7 @@ class VIEWLAYER_PT_photonsplat_passes(PhotonSplatPanel, Panel):
         view_layer = context.view_layer
         col = layout.column(heading="Data", align=True)
         col.prop(view_layer, "use_pass_combined")
-        col.prop(view_layer, "use_pass_z")
+        col.prop(view_layer, "use_pass_z", text="Depth")
         col.prop(view_layer, "use_pass_normal")
         col = layout.column(heading="Light", align=True)
         col.prop(view_layer, "use_pass_emit", text="Emission")

@@ -112,11 +112,17 @@ def doc_screenshots(window, folder):
     bw.screenshot_window(window, folder / "viewport_window.png")
     window, area, region, space = bw.view3d()
     bw.screenshot_area(window, area, folder / "viewport_caustic.png")
-    properties = next(a for a in window.screen.areas if a.type == 'PROPERTIES')
+    # The panels, readable: the big viewport area turned into a Properties editor for the shots.
+    area.type = 'PROPERTIES'
+    settings = bpy.context.scene.photonsplat
+    for name in ("viewport_passes", "viewport_time_limit"):     # show the defaults, not the test's limits
+        settings.property_unset(name)
+    yield 0.3
     for context, name in (('RENDER', "panel_render.png"), ('VIEW_LAYER', "panel_passes.png")):
-        properties.spaces.active.context = context
+        area.spaces.active.context = context
         yield 0.5
-        bw.screenshot_area(window, properties, folder / name)
+        bw.screenshot_area(window, area, folder / name)
+    area.type = 'VIEW_3D'
 
 
 bw.run_steps(steps(), timeout=90.0)
