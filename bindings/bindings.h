@@ -5,6 +5,7 @@
 
 namespace ps_py {
 
-void bind_images(pybind11::module_& m);  // images.cpp: write_image
+void bind_images(pybind11::module_& m);       // images.cpp: write_image
+void bind_progressive(pybind11::module_& m);  // progressive.cpp: Progressive (stepping, for the viewport)
 
 }  // namespace ps_py

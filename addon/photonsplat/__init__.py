@@ -25,6 +25,7 @@ try:
         METHODS,
         Camera,
         Cancelled,
+        Progressive,
         RenderSettings,
         Scene,
         render,

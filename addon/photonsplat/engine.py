@@ -101,24 +101,36 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
             return self._cancel_requested()
 
         try:
-            image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+            image, stats = self._render_passes(core, frame, result, on_progress)
         except core.Cancelled:
             self._cancelled(outcome)
             return
 
-        image = np.asarray(image, dtype=np.float32)
-        if image.shape != (frame.height, frame.width, 4):
-            raise RuntimeError(f"the core returned an image of shape {image.shape}, "
-                               f"expected {(frame.height, frame.width, 4)}")
-        # The core's row 0 is the top of the image; Blender's is the bottom.
-        pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
-        result.layers[0].passes["Combined"].rect.foreach_set(pixels)
-
+        _write_pixels(result, frame, image)
         outcome.status = "finished"
         outcome.stats = stats
         outcome.message = _summary(frame, stats, depsgraph.scene.photonsplat.photons)
         self.update_progress(1.0)
         self.update_stats("", f"Photon Splat | {outcome.message}")
+
+    def _render_passes(self, core, frame, result, on_progress):
+        """(image, stats). One pass: core.render. Progressive (passes != 1): one pass at a time, the running mean
+        shown after each; Esc after the first pass keeps the mean so far (stats values 'cancelled' = 1)."""
+        if frame.settings.passes == 1:
+            return core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+        progressive = core.Progressive(frame.scene, frame.camera, frame.settings)
+        while not progressive.finished:
+            try:
+                progressive.step(progress=on_progress)
+            except core.Cancelled:
+                if progressive.passes_done == 0:
+                    raise
+                stats = progressive.stats()
+                stats["values"]["cancelled"] = 1.0
+                return progressive.image(), stats
+            _write_pixels(result, frame, progressive.image())
+            self.update_result(result)
+        return progressive.image(), progressive.stats()
 
     def _cancel_requested(self):
         """True once the user pressed Esc. (A separate method so tests can simulate Esc: Blender looks up
@@ -146,6 +158,16 @@ def _describe(error):
     return f"{type(error).__name__}: {text}"
 
 
+def _write_pixels(result, frame, image):
+    image = np.asarray(image, dtype=np.float32)
+    if image.shape != (frame.height, frame.width, 4):
+        raise RuntimeError(f"the core returned an image of shape {image.shape}, "
+                           f"expected {(frame.height, frame.width, 4)}")
+    # The core's row 0 is the top of the image; Blender's is the bottom.
+    pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
+    result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+
+
 def _summary(frame, stats, photons):
     """The line shown in the status bar after a render: photons, scene size, radius used, time."""
     seconds, values = stats.get("seconds", {}), stats.get("values", {})
@@ -153,6 +175,11 @@ def _summary(frame, stats, photons):
     text = f"{photons:,} photons | {frame.triangles:,} triangles | {frame.lights} lights"
     if "radius" in values:
         text += f" | radius {values['radius']:.4g}"
+    passes = int(values.get("passes", 1))
+    if passes != 1 or frame.settings.passes != 1:
+        text += f" | {passes} passes" + (" (stopped by Esc)" if values.get("cancelled") else "")
+        if "final_radius" in values:
+            text += f", final radius {values['final_radius']:.4g}"
     return text + f" | {total:.2f} s"
 
 
