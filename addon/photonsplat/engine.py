@@ -119,18 +119,23 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         if frame.settings.passes == 1:
             return core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
         progressive = core.Progressive(frame.scene, frame.camera, frame.settings)
-        while not progressive.finished:
+        cancelled = False
+        while not progressive.finished and not cancelled:
             try:
                 progressive.step(progress=on_progress)
             except core.Cancelled:
                 if progressive.passes_done == 0:
                     raise
-                stats = progressive.stats()
-                stats["values"]["cancelled"] = 1.0
-                return progressive.image(), stats
-            _write_pixels(result, frame, progressive.image())
-            self.update_result(result)
-        return progressive.image(), progressive.stats()
+                cancelled = True
+            else:
+                _write_pixels(result, frame, progressive.image())
+                self.update_result(result)
+                # A pass shorter than the core's progress poll (0.1 s) never asks: ask between passes too.
+                cancelled = self._cancel_requested()
+        stats = progressive.stats()
+        if cancelled:
+            stats["values"]["cancelled"] = 1.0
+        return progressive.image(), stats
 
     def _cancel_requested(self):
         """True once the user pressed Esc. (A separate method so tests can simulate Esc: Blender looks up
