@@ -285,13 +285,17 @@ def first_time_reaching(curve, ssim):
 
 
 def ssim_at(curve, seconds):
+    """SSIM of the last mean done by `seconds`; None when the run's budget ended well before (a time-limited run
+    stops a pass short of its budget: within 25 % counts as having reached it)."""
     reached = [p for p in curve if p["seconds"] <= seconds]
-    return reached[-1]["ssim"] if reached else None
+    if not reached or curve[-1]["seconds"] < 0.75 * seconds:
+        return None
+    return reached[-1]["ssim"]
 
 
 def fmt_time(t, cap=None):
     if t is None:
-        return f"> {cap:.0f} s (not reached)" if cap is not None else "not reached"
+        return f"> {fmt_time(cap)} (not reached)" if cap is not None else "not reached"
     return f"{t:.2f} s" if t < 10 else f"{t:.0f} s"
 
 
