@@ -255,5 +255,7 @@ PYBIND11_MODULE(_core, m) {
           "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
 
     bind_images(m);
+    bind_metrics(m);
+    bind_reference(m);
     bind_progressive(m);
 }

@@ -28,7 +28,13 @@ try:
         Progressive,
         RenderSettings,
         Scene,
+        RELMSE_EPSILON,
+        psnr,
+        relmse,
         render,
+        render_reference,
+        rmse,
+        ssim,
         write_image,
     )
     from .cameras import look_at_camera  # noqa: F401
