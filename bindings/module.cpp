@@ -60,10 +60,18 @@ void add_mesh(ps::Scene& scene, const std::string& name, const py::object& verti
     scene.add_mesh(mesh);  // validates values: NaN, index ranges, material ids
 }
 
+// Python ints of any sign reach the core's unsigned pass count only through here, so -1 is named, not wrapped.
+uint32_t pass_count(int64_t passes) {
+    if (passes < 0 || passes > 1'000'000)
+        throw ps::InvalidInput("passes", "must be in [0, 1000000] (0 = until time_limit), got " + std::to_string(passes));
+    return static_cast<uint32_t>(passes);
+}
+
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
-                                 bool caustics_pass, bool transparent) {
+                                 int64_t passes, double time_limit, float alpha, bool caustics_pass,
+                                 bool transparent) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -76,6 +84,9 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.passes = pass_count(passes);
+    s.time_limit = time_limit;
+    s.alpha = alpha;
     s.caustics_pass = caustics_pass;
     s.transparent = transparent;
     ps::validate(s);
@@ -90,13 +101,7 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
         progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, settings, control); });
     py::array_t<float> image = image_array(r.rgba, r.height, r.width, 4);
     if (!passes) return py::make_tuple(image, stats_dict(r.stats));
-    py::dict components("emission"_a = image_array(r.emission, r.height, r.width, 3),
-                        "direct"_a = image_array(r.direct, r.height, r.width, 3),
-                        "indirect"_a = image_array(r.indirect, r.height, r.width, 3),
-                        "normal"_a = image_array(r.normal, r.height, r.width, 3),
-                        "depth"_a = image_array(r.depth, r.height, r.width, 1));
-    if (settings.caustics_pass) components["caustics"] = image_array(r.caustics, r.height, r.width, 3);
-    return py::make_tuple(image, stats_dict(r.stats), components);
+    return py::make_tuple(image, stats_dict(r.stats), pass_images(r));
 }
 
 }  // namespace
@@ -206,8 +211,8 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1,
-             "caustics_pass"_a = false, "transparent"_a = false)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
+             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "caustics_pass"_a = false, "transparent"_a = false)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -223,6 +228,14 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_property(
+            "passes", [](const ps::RenderSettings& s) { return s.passes; },
+            [](ps::RenderSettings& s, int64_t v) { s.passes = pass_count(v); },
+            "Progressive passes; 1 = the one-shot method, 0 = until time_limit")
+        .def_readwrite("time_limit", &ps::RenderSettings::time_limit,
+                       "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
+        .def_readwrite("alpha", &ps::RenderSettings::alpha,
+                       "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -233,6 +246,7 @@ PYBIND11_MODULE(_core, m) {
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
+              << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
               << ", transparent=" << (s.transparent ? "True" : "False") << ")";
             return o.str();
@@ -243,7 +257,12 @@ PYBIND11_MODULE(_core, m) {
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
           "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
           "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
-          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
+          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
+          "settings.passes != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
+          "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
 
     bind_images(m);
+    bind_metrics(m);
+    bind_reference(m);
+    bind_progressive(m);
 }

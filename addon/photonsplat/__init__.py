@@ -25,9 +25,16 @@ try:
         METHODS,
         Camera,
         Cancelled,
+        Progressive,
         RenderSettings,
         Scene,
+        RELMSE_EPSILON,
+        psnr,
+        relmse,
         render,
+        render_reference,
+        rmse,
+        ssim,
         write_image,
     )
     from .cameras import look_at_camera  # noqa: F401

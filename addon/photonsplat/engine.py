@@ -16,6 +16,7 @@ import traceback
 from dataclasses import dataclass, field
 
 import bpy
+import numpy as np
 
 from . import export, passes
 
@@ -138,27 +139,47 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
 
         components = None
         try:
-            if passes.needs_components(view_layer):
-                image, stats, components = core.render(frame.scene, frame.camera, frame.settings,
-                                                       progress=on_progress, passes=True)
-            else:
-                image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+            image, stats, components = self._render_passes(core, frame, result, on_progress,
+                                                           passes.needs_components(view_layer))
         except core.Cancelled:
             self._cancelled(outcome)
             return
 
-        layer = result.layers[0]
-        combined = layer.passes["Combined"]
-        if len(combined.rect) != frame.width * frame.height:
-            raise RuntimeError(f"Blender's result holds {len(combined.rect)} pixels, the render "
-                               f"{frame.width}x{frame.height}: the render border was read differently")
-        outcome.passes = passes.write_passes(layer, image, components, frame.width, frame.height)
-
+        _write_pixels(result, frame, image)
+        outcome.passes = ["Combined", *passes.write_passes(result.layers[0], components, frame.width, frame.height)]
         outcome.status = "finished"
         outcome.stats = stats
         outcome.message = _summary(frame, stats, depsgraph.scene.photonsplat.photons)
         self.update_progress(1.0)
         self.update_stats("", f"Photon Splat | {outcome.message}")
+
+    def _render_passes(self, core, frame, result, on_progress, components):
+        """(image, stats, per-pass images or None). One pass: core.render. Progressive (passes != 1): one pass at
+        a time, the running mean shown after each; Esc after the first pass keeps the mean so far (stats values
+        'cancelled' = 1). `components`: whether the render passes beyond Combined are wanted."""
+        _check_result_size(result, frame)
+        if frame.settings.passes == 1:
+            if components:
+                return core.render(frame.scene, frame.camera, frame.settings, progress=on_progress, passes=True)
+            return (*core.render(frame.scene, frame.camera, frame.settings, progress=on_progress), None)
+        progressive = core.Progressive(frame.scene, frame.camera, frame.settings)
+        cancelled = False
+        while not progressive.finished and not cancelled:
+            try:
+                progressive.step(progress=on_progress)
+            except core.Cancelled:
+                if progressive.passes_done == 0:
+                    raise
+                cancelled = True
+            else:
+                _write_pixels(result, frame, progressive.image())
+                self.update_result(result)
+                # A pass shorter than the core's progress poll (0.1 s) never asks: ask between passes too.
+                cancelled = self._cancel_requested()
+        stats = progressive.stats()
+        if cancelled:
+            stats["values"]["cancelled"] = 1.0
+        return progressive.image(), stats, progressive.passes() if components else None
 
     def _cancel_requested(self):
         """True once the user pressed Esc. (A separate method so tests can simulate Esc: Blender looks up
@@ -186,6 +207,23 @@ def _describe(error):
     return f"{type(error).__name__}: {text}"
 
 
+def _check_result_size(result, frame):
+    combined = result.layers[0].passes["Combined"]
+    if len(combined.rect) != frame.width * frame.height:
+        raise RuntimeError(f"Blender's result holds {len(combined.rect)} pixels, the render "
+                           f"{frame.width}x{frame.height}: the render border was read differently")
+
+
+def _write_pixels(result, frame, image):
+    image = np.asarray(image, dtype=np.float32)
+    if image.shape != (frame.height, frame.width, 4):
+        raise RuntimeError(f"the core returned an image of shape {image.shape}, "
+                           f"expected {(frame.height, frame.width, 4)}")
+    # The core's row 0 is the top of the image; Blender's is the bottom.
+    pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
+    result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+
+
 def _summary(frame, stats, photons):
     """The line shown in the status bar after a render: photons, scene size, radius used, time."""
     seconds, values = stats.get("seconds", {}), stats.get("values", {})
@@ -193,6 +231,11 @@ def _summary(frame, stats, photons):
     text = f"{photons:,} photons | {frame.triangles:,} triangles | {frame.lights} lights"
     if "radius" in values:
         text += f" | radius {values['radius']:.4g}"
+    passes = int(values.get("passes", 1))
+    if passes != 1 or frame.settings.passes != 1:
+        text += f" | {passes} passes" + (" (stopped by Esc)" if values.get("cancelled") else "")
+        if "final_radius" in values:
+            text += f", final radius {values['final_radius']:.4g}"
     return text + f" | {total:.2f} s"
 
 

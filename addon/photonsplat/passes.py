@@ -61,15 +61,17 @@ def needs_components(view_layer):
     return any(p.source for p in enabled_passes(view_layer))
 
 
-def write_passes(layer, image, components, width, height):
-    """Writes Combined and every enabled pass the result layer has. Core images have row 0 at the top;
-    Blender's at the bottom. Returns the names written."""
+def write_passes(layer, components, width, height):
+    """Writes every pass beyond Combined that the result layer has (the engine writes Combined as it goes).
+    Core images have row 0 at the top; Blender's at the bottom. Returns the names written."""
     written = []
     for render_pass in PASSES:
+        if not render_pass.source:
+            continue
         target = layer.passes.get(render_pass.name)
         if target is None:
             continue
-        data = image if not render_pass.source else (components or {}).get(render_pass.source)
+        data = (components or {}).get(render_pass.source)
         if data is None:
             raise RuntimeError(f"the core returned no '{render_pass.source}' image for the {render_pass.name} pass")
         channels = len(render_pass.channel_ids)

@@ -75,6 +75,18 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
                     "-1 chooses it from the radius",
         default=-1, min=-1, soft_max=16,
     )
+    passes: IntProperty(
+        name="Passes",
+        description="Progressive passes: each traces new photons with a smaller radius and jittered pixels, and the "
+                    "image is their mean, which converges to the exact answer. 1 = the one-shot method; "
+                    "0 = as many as fit in the time limit",
+        default=1, min=0, soft_max=1000,
+    )
+    time_limit: FloatProperty(
+        name="Time Limit",
+        description="Seconds of progressive rendering (no pass is started that would end past it); 0 = no limit",
+        default=0.0, min=0.0, soft_max=600.0, unit='TIME_ABSOLUTE',
+    )
     threads: IntProperty(
         name="Threads",
         description="Number of CPU threads; 0 uses all cores",

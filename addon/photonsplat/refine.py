@@ -8,14 +8,14 @@ Cancelled and the thread ends by itself; a restarted view simply starts a new Re
 
 import threading
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 
 @dataclass(frozen=True)
 class RefineSettings:
-    render: dict                 # core RenderSettings fields of every pass (photons replaced per pass)
+    render: dict                 # core RenderSettings fields (photons, passes and time_limit set here)
     preview_photons: int = 20_000
     preview_divider: int = 4     # the first image is rendered at 1/divider of the resolution
     photons_per_pass: int = 100_000
@@ -33,13 +33,26 @@ class Frame:
     version: int         # increases with every new frame
 
 
-def photon_pass(core, scene, camera, settings, index, progress):
-    """Renders refinement pass `index` (0, 1, ...) of a view: an independent image with its own random seed.
-    The one place that knows how a pass is made, so a progressive core can replace it."""
-    fields = dict(settings.render, photons=settings.photons_per_pass,
-                  seed=settings.render.get("seed", 0) + 1 + index)
+def first_image(core, scene, camera, settings, progress):
+    """The fast image answering a change: few photons, one pass (the caller gives a reduced-size camera)."""
+    fields = dict(settings.render, photons=settings.preview_photons, passes=1, time_limit=0.0)
     image, _ = core.render(scene, camera, core.RenderSettings(**fields), progress=progress)
     return np.asarray(image, dtype=np.float32)
+
+
+# The core's own bound on progressive passes (RenderSettings.passes); our loop stops by itself before it.
+MAX_CORE_PASSES = 1_000_000
+
+
+def refined_images(core, scene, camera, settings, progress):
+    """Yields the running mean after each refinement pass, forever (the caller stops): the core's progressive
+    render, whose passes trace new photons with a shrinking radius, so the mean converges to the exact image."""
+    fields = dict(settings.render, photons=settings.photons_per_pass, time_limit=0.0,
+                  passes=settings.max_passes or MAX_CORE_PASSES)
+    progressive = core.Progressive(scene, camera, core.RenderSettings(**fields))
+    while True:
+        progressive.step(progress=progress)
+        yield np.asarray(progressive.image(), dtype=np.float32)
 
 
 class Refinement:
@@ -102,23 +115,20 @@ class Refinement:
         try:
             # The first image: few photons at a fraction of the resolution, to answer the change at once.
             divider = max(1, settings.preview_divider)
-            preview = replace(settings, photons_per_pass=settings.preview_photons)
             camera = self._make_camera(max(1, width // divider), max(1, height // divider))
-            image = photon_pass(core, self._scene, camera, preview, -1, self._cancel_requested)
+            image = first_image(core, self._scene, camera, settings, self._cancel_requested)
             self.first_image_seconds = time.perf_counter() - self._started
             self._publish(np.ascontiguousarray(image[::-1]), 0)
 
             camera = self._make_camera(width, height)
-            total, done = None, 0
-            while not self._stop.is_set():
-                if settings.max_passes and done >= settings.max_passes:
+            done = 0
+            for mean in refined_images(core, self._scene, camera, settings, self._cancel_requested):
+                done += 1
+                self._publish(np.ascontiguousarray(mean[::-1]), done)
+                if self._stop.is_set() or (settings.max_passes and done >= settings.max_passes):
                     break
                 if settings.time_limit and time.perf_counter() - self._started >= settings.time_limit:
                     break
-                image = photon_pass(core, self._scene, camera, settings, done, self._cancel_requested)
-                total = image.astype(np.float64) if total is None else total + image
-                done += 1
-                self._publish(np.ascontiguousarray((total / done)[::-1], dtype=np.float32), done)
             self.finished = not self._stop.is_set()
         except core.Cancelled:
             pass

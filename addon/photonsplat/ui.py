@@ -74,6 +74,9 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         if settings.method == "directional":
             col.prop(settings, "directional_level")
         col = layout.column()
+        col.prop(settings, "passes")
+        col.prop(settings, "time_limit")
+        col = layout.column()
         col.prop(settings, "max_bounces")
         col.prop(settings, "direct_samples")
         col.prop(settings, "seed")

@@ -84,6 +84,7 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
             out.value = (d2 > 0.0f && pdf_area > 0.0f)
                             ? scene_.materials()[t.material].emission * (cos_light / (d2 * pdf_area))
                             : glm::vec3(0.0f);
+            out.pdf = cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
             return out;
         }
         case Kind::world: {
@@ -97,6 +98,19 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
         }
     }
     return {};
+}
+
+float LightSources::emissive_pdf(uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const {
+    const auto found = std::lower_bound(emitters_.begin(), emitters_.end(), triangle);  // ascending by construction
+    if (found == emitters_.end() || *found != triangle) return 0.0f;
+    const Triangle& t = scene_.triangles()[triangle];
+    const glm::vec3 to_light = y - x;
+    const float d2 = glm::dot(to_light, to_light);
+    if (!(d2 > 0.0f)) return 0.0f;
+    const glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+    const float cos_light = std::fabs(glm::dot(ng, to_light)) / std::sqrt(d2);
+    const float pdf_area = emitter_probability_[static_cast<size_t>(found - emitters_.begin())] / triangle_area(t);
+    return cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
 }
 
 EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float u3, float u4, float u5) const {

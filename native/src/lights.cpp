@@ -80,6 +80,7 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
                 out.wi = to_light / out.distance;
                 const float cos_light = std::max(0.0f, glm::dot(axis, -out.wi));
                 out.value = light.value * (cos_light / d2);
+                out.pdf = cos_light > 0.0f ? d2 / (cos_light * kPi * light.radius * light.radius) : 0.0f;
             } else {
                 const float d2 = glm::dot(to_light, to_light);
                 out.distance = std::sqrt(d2);
@@ -94,6 +95,7 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
                                         : towards_sun;
             out.distance = std::numeric_limits<float>::infinity();
             out.value = light.value;
+            if (light.angle > 0.0f) out.pdf = 1.0f / (2.0f * kPi * (1.0f - std::cos(0.5f * light.angle)));
             break;
         }
         case LightKind::area: {
@@ -104,10 +106,62 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
             out.wi = to_light / out.distance;
             const float cos_light = std::max(0.0f, glm::dot(light.area_normal(), -out.wi));
             out.value = light.value * (cos_light * light.area() / d2);
+            out.pdf = cos_light > 0.0f ? d2 / (cos_light * light.area()) : 0.0f;
             break;
         }
     }
     if (!(out.distance > 0.0f)) out.value = glm::vec3(0.0f);  // receiver exactly on the light
+    return out;
+}
+
+LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3& direction) {
+    LightHit out;
+    switch (light.kind) {
+        case LightKind::point: {
+            if (!(light.radius > 0.0f)) return out;
+            // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²).
+            const glm::vec3 from_light = x - light.position;
+            const float d = glm::length(from_light);
+            if (!(d > light.radius)) return out;  // x inside the light: it samples no disc either
+            const glm::vec3 axis = from_light / d;
+            const float cos_light = -glm::dot(direction, axis);
+            if (!(cos_light > 0.0f)) return out;
+            const float t = d / cos_light;
+            const glm::vec3 offset = x + t * direction - light.position;
+            if (!(glm::dot(offset, offset) < light.radius * light.radius)) return out;
+            const float area = kPi * light.radius * light.radius;
+            out = {true, t, light.value / area, t * t / (cos_light * area)};
+            return out;
+        }
+        case LightKind::sun: {
+            if (!(light.angle > 0.0f)) return out;
+            const float cos_max = std::cos(0.5f * light.angle);
+            if (!(glm::dot(direction, -glm::normalize(light.direction)) >= cos_max)) return out;
+            // Uniform radiance over the cone whose irradiance (at normal incidence, small cone) is `value`: the
+            // same E/Ω that sample_light_incidence's value = radiance / pdf implies.
+            const float solid_angle = 2.0f * kPi * (1.0f - cos_max);
+            out = {true, std::numeric_limits<float>::infinity(), light.value / solid_angle, 1.0f / solid_angle};
+            return out;
+        }
+        case LightKind::area: {
+            const glm::vec3 n = light.area_normal();
+            const float cos_light = -glm::dot(direction, n);  // one-sided: the ray must meet the emitting face
+            if (!(cos_light > 0.0f)) return out;
+            const float t = glm::dot(light.position - x, n) / glm::dot(direction, n);
+            if (!(t > 0.0f) || !std::isfinite(t)) return out;
+            // Coordinates of the hit in the edge vectors (a parallelogram in general): q = a·u + b·v.
+            const glm::vec3 q = x + t * direction - light.position;
+            const float uu = glm::dot(light.axis_u, light.axis_u), vv = glm::dot(light.axis_v, light.axis_v);
+            const float uv = glm::dot(light.axis_u, light.axis_v);
+            const float qu = glm::dot(q, light.axis_u), qv = glm::dot(q, light.axis_v);
+            const float det = uu * vv - uv * uv;
+            if (!(det > 0.0f)) return out;
+            const float a = (qu * vv - qv * uv) / det, b = (qv * uu - qu * uv) / det;
+            if (!(std::fabs(a) <= 0.5f && std::fabs(b) <= 0.5f)) return out;
+            out = {true, t, light.value, t * t / (cos_light * light.area())};
+            return out;
+        }
+    }
     return out;
 }
 

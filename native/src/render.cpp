@@ -13,6 +13,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/photons.h"
+#include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/view_samples.h"
@@ -22,6 +23,8 @@ namespace ps {
 namespace {
 
 constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyond any machine we target
+constexpr uint32_t kMaxPasses = 1'000'000;      // r shrinks as passes^(−1/6): far past any useful radius
+constexpr double kMaxTimeLimit = 1e7;           // seconds, about 4 months
 
 template <typename T>
 void require(bool ok, const std::string& field, const std::string& what, T value) {
@@ -32,27 +35,6 @@ std::string gib(double bytes) {
     char text[32];
     std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
     return text;
-}
-
-// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
-// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
-// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
-void check_memory(const Camera& camera, uint64_t photons) {
-    const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
-    // the passes, normal and depth
-    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16);
-    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
-    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
-    if (frame_bytes > 0.5 * memory)
-        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
-                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
-                                             gib(memory) + "; lower the resolution");
-    if (photon_bytes > 0.5 * memory)
-        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
-                                          " of photon records, more than half of this machine's " + gib(memory) +
-                                          "; lower the photon count");
 }
 
 }  // namespace
@@ -70,6 +52,50 @@ void validate(const RenderSettings& s) {
             "must be finite and >= 0 (0 = off)", s.plane_distance);
     require(s.directional_level >= -1 && s.directional_level <= 64, "directional_level",
             "must be in [-1, 64] (-1 = chosen from the radius)", s.directional_level);
+    require(s.passes <= kMaxPasses, "passes", "must be in [0, " + std::to_string(kMaxPasses) + "] (0 = until time_limit)",
+            s.passes);
+    require(std::isfinite(s.time_limit) && s.time_limit >= 0.0 && s.time_limit <= kMaxTimeLimit, "time_limit",
+            "must be in [0, " + std::to_string(int(kMaxTimeLimit)) + "] seconds (0 = none)", s.time_limit);
+    require(s.passes > 0 || s.time_limit > 0.0, "passes",
+            "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.passes);
+    require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
+            "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
+}
+
+uint64_t pass_seed(uint64_t seed, uint32_t pass) {
+    if (pass == 0) return seed;
+    // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
+    uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(pass) + 1));
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+float first_radius(const Scene& scene, const RenderSettings& settings) {
+    return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+}
+
+// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
+// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
+// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
+void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel) {
+    const double pixels = static_cast<double>(camera.width()) * camera.height();
+    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
+    // the passes, normal and depth
+    const double frame_bytes =
+        pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16 + extra_bytes_per_pixel);
+    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
+    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
+    if (frame_bytes > 0.5 * memory)
+        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
+                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
+                                             gib(memory) + "; lower the resolution");
+    if (photon_bytes > 0.5 * memory)
+        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
+                                          " of photon records, more than half of this machine's " + gib(memory) +
+                                          "; lower the photon count");
 }
 
 float default_radius(const Scene& scene, uint64_t photons) {
@@ -80,14 +106,16 @@ float default_radius(const Scene& scene, uint64_t photons) {
     return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
 }
 
-RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                         const PassParams& pass, RenderControl& control) {
     validate(settings);
     check_memory(camera, settings.photons);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     Stats& stats = result.stats;
-    const float radius = settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+    const float radius = pass.radius;
+    const uint64_t seed = pass_seed(settings.seed, pass.index);
     stats.values["radius"] = radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = width;
@@ -108,13 +136,14 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
 
         control.begin_stage("view samples", 0.02, 0.15);
         ViewSampleSettings view_settings;
-        view_settings.seed = settings.seed;
+        view_settings.seed = seed;
+        view_settings.jitter = pass.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
 
         control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
-        direct_settings.seed = settings.seed;
+        direct_settings.seed = seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
 
@@ -122,7 +151,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
-        photon_settings.seed = settings.seed;
+        photon_settings.seed = seed;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;
@@ -177,6 +206,11 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();
+                // Progressive passes: an explicit directional level would keep its blocks however small r gets, so
+                // once the leaves outgrow the radius the automatic rule takes over, and it splats exactly.
+                if (settings.method == SplatMethod::directional && pass.index > 0 && params.directional_level >= 0 &&
+                    directional_leaves_exceed_radius(hierarchy, radius))
+                    params.directional_level = -1;
                 auto splat = [&](const PhotonMap& map) {
                     if (settings.method == SplatMethod::cluster)
                         return splat_cluster(hierarchy, samples, map, params, control, stats);
@@ -235,6 +269,16 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                                                     result.normal.size() + result.depth.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);
+    return result;
+}
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+    validate(settings);
+    if (settings.passes != 1) return render_progressive(scene, camera, settings, control);
+    PassParams pass;
+    pass.radius = first_radius(scene, settings);
+    RenderResult result = render_pass(scene, camera, settings, pass, control);
+    result.stats.values["passes"] = 1.0;
     return result;
 }
 

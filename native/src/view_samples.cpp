@@ -114,7 +114,13 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, cons
             for (int x = 0; x < width; ++x) {
                 const size_t pixel = static_cast<size_t>(y) * width + x;
                 Rng rng(settings.seed, RngDomain::camera, pixel);
-                const Ray ray = camera.generate_ray(x + 0.5f, y + 0.5f);
+                float jx = 0.5f, jy = 0.5f;
+                if (settings.jitter) {
+                    Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
+                    jx = jitter.uniform();
+                    jy = jitter.uniform();
+                }
+                const Ray ray = camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
                 ViewSample& sample = per_pixel[pixel];
                 sample.pixel = static_cast<uint32_t>(pixel);
                 if (trace_camera_path(scene, camera, ray, rng, settings.max_specular_depth, sample,

@@ -185,3 +185,15 @@ def test_frame_range_renders_every_frame(caustics_scene, tmp_path, core):
 
 def luminance(rgba):
     return rgba[..., 0] * 0.2126 + rgba[..., 1] * 0.7152 + rgba[..., 2] * 0.0722
+
+
+def test_passes_of_a_progressive_render(caustics_scene, tmp_path, core):
+    """With progressive passes the colour passes are means like the image: they still add up to Combined."""
+    use_photonsplat(caustics_scene, 32, 10_000, passes=3)
+    enable_all_passes(bpy.context.view_layer)
+    images = read_passes(tmp_path, ALL_PASSES)
+    assert engine.last_outcome.stats["values"]["passes"] == 3
+    assert all(np.isfinite(image).all() for image in images.values())
+    rgb = {name: images[name][..., :3] for name in ("Combined", "Emit", "Direct", "Indirect", "Caustics")}
+    assert np.allclose(rgb["Combined"], rgb["Emit"] + rgb["Direct"] + rgb["Indirect"], atol=1e-4)
+    assert 0.0 < rgb["Caustics"].mean() < rgb["Indirect"].mean()

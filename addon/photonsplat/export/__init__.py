@@ -93,7 +93,8 @@ def render_settings(core, props, **overrides):
     fields = dict(photons=props.photons, radius=props.radius, method=props.method,
                   max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
                   direct_samples=props.direct_samples, kernel=props.kernel,
-                  directional_level=props.directional_level)
+                  directional_level=props.directional_level, passes=props.passes,
+                  time_limit=props.time_limit)
     fields.update(overrides)
     return core.RenderSettings(**fields)
 

@@ -23,8 +23,14 @@ public:
     glm::vec3 flux(size_t i) const { return sources_[i].flux; }  // [W] sent into the scene
     bool is_delta(size_t i) const;                                // one shadow ray is exact
     bool is_world(size_t i) const { return sources_[i].kind == Kind::world; }  // the uniform background
+    const Light* light(size_t i) const { return sources_[i].light; }          // nullptr unless a scene light
+
+    // Solid-angle density with which sample_incidence of the emissive surfaces draws the point y of
+    // `triangle` from x (0 when the triangle does not emit): for MIS of BSDF rays that hit emitters.
+    float emissive_pdf(uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
+    // The returned pdf is set for scene lights and emissive surfaces; the world's cosine sampling leaves it 0.
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
                                     float u3) const;
     // A photon's starting ray and power. u1..u5 in [0, 1).

@@ -36,9 +36,22 @@ struct LightIncidence {
     glm::vec3 wi;      // unit, from the receiving point towards the light
     float distance;    // to the sampled light point (infinity for a sun)
     glm::vec3 value;   // incident radiance × geometry / pdf (irradiance per unit cos θ)
+    float pdf = 0.0f;  // solid-angle density of having drawn wi (for MIS); 0 for a delta light
 };
 LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, float u1, float u2);
 bool light_is_delta(const Light& light);  // a point of radius 0 or a 0° sun: one shadow ray is exact
+
+// Where a ray from x along `direction` (unit) meets the light's emitting shape AS sample_light_incidence(x)
+// samples it (a point light's disc facing x, a sun's cone, an area light's front face), for a path tracer whose
+// BSDF-sampled rays may hit lights (multiple importance sampling). pdf is the density sample_light_incidence
+// has of drawing that direction from x. A delta light is never hit.
+struct LightHit {
+    bool hit = false;
+    float distance = 0.0f;       // along the ray; infinity for a sun
+    glm::vec3 radiance{0.0f};    // emitted towards x
+    float pdf = 0.0f;            // solid angle
+};
+LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3& direction);
 
 // Total flux [W] the light sends into the scene; a sun's is what crosses the scene's bounding sphere.
 glm::vec3 light_flux(const Light& light, float scene_radius);

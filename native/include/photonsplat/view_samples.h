@@ -49,6 +49,10 @@ struct ViewSamples {
 struct ViewSampleSettings {
     uint64_t seed = 0;
     int max_specular_depth = 8;   // bounces through mirror/glass before the path is dropped
+    // false: every ray through its pixel's centre (a one-shot render). true: through a point drawn uniformly in
+    // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
+    // mean is box-filtered over each pixel (anti-aliasing).
+    bool jitter = false;
 };
 
 ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,
