@@ -133,3 +133,22 @@ def test_refinement_stops_quickly_when_asked(caustics_scene, core):
     assert job.join(5.0), "the refinement thread did not stop"
     print(f"\nstopped {time.perf_counter() - asked:.2f} s after being asked")
     assert not job.finished and job.error is None
+
+
+def test_stop_all_ends_every_viewport_thread(caustics_scene, core):
+    """What unregistering the add-on and loading a file do (viewport.unregister, the load_pre handler)."""
+    job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_pass=2_000_000,
+                                 max_passes=0, time_limit=0.0)
+
+    class Session:                       # stands in for a ViewportSession holding this refinement
+        def stop(self):
+            job.stop()
+
+        def join(self, timeout):
+            return job.join(timeout)
+    session = Session()
+    viewport._sessions.add(session)
+    job.start()
+    time.sleep(0.3)
+    viewport.stop_all(wait=5.0)
+    assert not job.running
