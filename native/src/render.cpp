@@ -150,6 +150,7 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
         photon_settings.seed = seed;
+        photon_settings.guide = settings.guide_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;
@@ -184,9 +185,12 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
                     StageTimer t(stats, "hierarchy_build");
                     ClusterBuildOptions build_options;
                     build_options.normal_cones = settings.method == SplatMethod::cluster_cone;
+                    build_options.leaf_summaries = settings.method == SplatMethod::directional;
                     hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), build_options);
                 }
                 stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
+                if (!hierarchy.leaf_summaries.empty())
+                    stats.bytes["leaf_summaries"] = static_cast<double>(hierarchy.summary_bytes());
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();

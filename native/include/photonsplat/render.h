@@ -24,6 +24,7 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
+    bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)
     // Progressive rendering (progressive.h): passes of new photons, jittered camera rays and a shrinking radius,
     // averaged. 1 = the paper's one-shot method, exactly the image of a single pass.
     uint32_t passes = 1;              // 0 = no pass limit (then time_limit must be > 0)
