@@ -70,8 +70,8 @@ uint32_t pass_count(int64_t passes) {
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
-                                 int64_t passes, double time_limit, float alpha, bool caustics_pass,
-                                 bool transparent) {
+                                 int64_t passes, double time_limit, float alpha, bool guide_photons,
+                                 bool caustics_pass, bool transparent) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -87,6 +87,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.passes = pass_count(passes);
     s.time_limit = time_limit;
     s.alpha = alpha;
+    s.guide_photons = guide_photons;
     s.caustics_pass = caustics_pass;
     s.transparent = transparent;
     ps::validate(s);
@@ -212,7 +213,8 @@ PYBIND11_MODULE(_core, m) {
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
              "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
-             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "caustics_pass"_a = false, "transparent"_a = false)
+             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
+             "transparent"_a = false)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -236,6 +238,8 @@ PYBIND11_MODULE(_core, m) {
                        "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
         .def_readwrite("alpha", &ps::RenderSettings::alpha,
                        "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
+        .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
+                       "Emit sun photons where pilot paths found them stored; unbiased (default True)")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -247,6 +251,7 @@ PYBIND11_MODULE(_core, m) {
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
               << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False")
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
               << ", transparent=" << (s.transparent ? "True" : "False") << ")";
             return o.str();

@@ -133,7 +133,7 @@ def measure_scene(args):
     frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
 
     # 1. the reference
-    reference, record["reference"] = reference_image(core, frame, name, blend, args)
+    reference, record["reference"] = reference_image(core, frame, name, blend, caustic, args)
     np.save(out / "reference.npy", reference)
 
     # 2. one-shot renders shaped like the paper's tables
@@ -191,11 +191,12 @@ def measure_scene(args):
     print(f"report: {name} written to {out}", flush=True)
 
 
-def reference_image(core, frame, name, blend, args):
+def reference_image(core, frame, name, blend, caustic, args):
     """The converged reference, from the cache when the same scene, size and settings were rendered before."""
     cache = pathlib.Path(args.out) / "reference"
     cache.mkdir(parents=True, exist_ok=True)
-    key = f"{name}_{frame.width}x{frame.height}_{args.reference_samples}spp_{file_digest(blend)}"
+    key = (f"{name}_{frame.width}x{frame.height}_{args.reference_samples}spp_{args.reference_seconds:g}s_"
+           f"{args.reference_photons}ph_{file_digest(blend)}")
     path = cache / f"{key}.npy"
     info_path = cache / f"{key}.json"
     if path.exists() and info_path.exists():
@@ -203,11 +204,13 @@ def reference_image(core, frame, name, blend, args):
         return np.load(path), json.loads(info_path.read_text())
     started = time.perf_counter()
     if hasattr(core, "render_reference"):
+        # Caustic photons only where glass or mirrors can make caustics; elsewhere pure path tracing.
+        photons = args.reference_photons if caustic else 0
         image, stats = core.render_reference(frame.scene, frame.camera, samples=args.reference_samples,
-                                             seed=1234, caustic_photons=args.reference_photons,
+                                             seed=1234, caustic_photons=photons,
                                              time_limit=args.reference_seconds)
         info = {"kind": "render_reference (path tracing + progressive photon mapping of caustics)",
-                "samples": stats["values"].get("samples", args.reference_samples)}
+                "samples": stats["values"].get("samples", args.reference_samples), "caustic_photons": photons}
     else:
         # Without the reference renderer: a long progressive exact splat, which converges to the same answer but
         # is not independent of the methods measured; the report says so.
@@ -493,17 +496,18 @@ def parse_args():
     parser.add_argument("mode", choices=["measure", "write"])
     parser.add_argument("--out", default=str(ROOT / "build" / "report"), help="measurements and reference cache")
     parser.add_argument("--docs", default=str(ROOT / "docs" / "results"), help="where write puts its outputs")
-    parser.add_argument("--width", type=int, default=192, help="image width; height keeps the scene's aspect")
+    parser.add_argument("--width", type=int, default=128, help="image width; height keeps the scene's aspect")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--seconds", type=float, default=5.0, help="progressive budget per method")
     parser.add_argument("--long-seconds", type=float, default=30.0,
                         help="progressive budget of cluster_cone on caustic scenes (the 30 s figure)")
     parser.add_argument("--progressive-photons", type=int, default=50_000, help="photons per progressive pass")
-    parser.add_argument("--reference-samples", type=int, default=1024)
-    parser.add_argument("--reference-photons", type=int, default=200_000, help="caustic photons per reference pass")
-    parser.add_argument("--reference-seconds", type=float, default=240.0, help="time cap of one reference")
+    parser.add_argument("--reference-samples", type=int, default=4096, help="reference passes (1 path/pixel each)")
+    parser.add_argument("--reference-photons", type=int, default=100_000, help="caustic photons per reference pass")
+    parser.add_argument("--reference-seconds", type=float, default=150.0,
+                        help="time cap of one reference (it stops after the pass that reaches it)")
     parser.add_argument("--cycles-max-samples", type=int, default=65536)
-    parser.add_argument("--cycles-max-seconds", type=float, default=120.0,
+    parser.add_argument("--cycles-max-seconds", type=float, default=45.0,
                         help="stop Cycles' sample doubling after a render that took longer than this")
     parser.add_argument("--no-cycles", action="store_true")
     return parser.parse_args(argv)

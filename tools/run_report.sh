@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates docs/results/report.md, report.csv and the report_*.png plots and crops (issue 4: speed against
-# error): every scene of blend_scenes/ at 192 pixels wide (height from the scene's aspect), one Blender run per
+# error): every scene of blend_scenes/ at 128 pixels wide (height from the scene's aspect), one Blender run per
 # scene measuring the paper's tables, progressive splatting over time and, on the caustic scenes, Cycles; then
 # plain Python writes the tables and plots. References are cached under build/report/reference/ (keyed by each
 # .blend's content), so a rerun skips them. About 20 minutes on the project's 2-core machine the first time,

@@ -39,6 +39,28 @@ std::string gib(double bytes) {
 
 }  // namespace
 
+// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
+// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
+// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
+void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel) {
+    const double pixels = static_cast<double>(camera.width()) * camera.height();
+    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
+    // the passes, normal and depth
+    const double frame_bytes =
+        pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16 + extra_bytes_per_pixel);
+    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
+    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
+    if (frame_bytes > 0.5 * memory)
+        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
+                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
+                                             gib(memory) + "; lower the resolution");
+    if (photon_bytes > 0.5 * memory)
+        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
+                                          " of photon records, more than half of this machine's " + gib(memory) +
+                                          "; lower the photon count");
+}
+
 void validate(const RenderSettings& s) {
     require(s.photons <= kMaxPhotons, "photons", "must be at most " + std::to_string(kMaxPhotons), s.photons);
     require(std::isfinite(s.radius) && s.radius >= 0.0f, "radius", "must be finite and >= 0 (0 = automatic)", s.radius);
@@ -62,6 +84,14 @@ void validate(const RenderSettings& s) {
             "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
 }
 
+float default_radius(const Scene& scene, uint64_t photons) {
+    // About 1.5 % of the scene's diagonal at 200k photons, shrinking as 1/sqrt(N) so that a kernel disc
+    // holds roughly the same number of photons whatever the count.
+    const float diagonal = glm::length(scene.bounds_max() - scene.bounds_min());
+    const double n = static_cast<double>(std::max<uint64_t>(photons, 1));
+    return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
+}
+
 uint64_t pass_seed(uint64_t seed, uint32_t pass) {
     if (pass == 0) return seed;
     // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
@@ -74,36 +104,6 @@ uint64_t pass_seed(uint64_t seed, uint32_t pass) {
 
 float first_radius(const Scene& scene, const RenderSettings& settings) {
     return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
-}
-
-// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
-// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
-// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
-void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel) {
-    const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
-    // the passes, normal and depth
-    const double frame_bytes =
-        pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16 + extra_bytes_per_pixel);
-    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
-    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
-    if (frame_bytes > 0.5 * memory)
-        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
-                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
-                                             gib(memory) + "; lower the resolution");
-    if (photon_bytes > 0.5 * memory)
-        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
-                                          " of photon records, more than half of this machine's " + gib(memory) +
-                                          "; lower the photon count");
-}
-
-float default_radius(const Scene& scene, uint64_t photons) {
-    // About 1.5 % of the scene's diagonal at 200k photons, shrinking as 1/sqrt(N) so that a kernel disc
-    // holds roughly the same number of photons whatever the count.
-    const float diagonal = glm::length(scene.bounds_max() - scene.bounds_min());
-    const double n = static_cast<double>(std::max<uint64_t>(photons, 1));
-    return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
 }
 
 RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
@@ -152,6 +152,7 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
         photon_settings.seed = seed;
+        photon_settings.guide = settings.guide_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;
@@ -200,9 +201,12 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
                     StageTimer t(stats, "hierarchy_build");
                     ClusterBuildOptions build_options;
                     build_options.normal_cones = settings.method == SplatMethod::cluster_cone;
+                    build_options.leaf_summaries = settings.method == SplatMethod::directional;
                     hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), build_options);
                 }
                 stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
+                if (!hierarchy.leaf_summaries.empty())
+                    stats.bytes["leaf_summaries"] = static_cast<double>(hierarchy.summary_bytes());
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();

@@ -29,6 +29,12 @@ public:
     // `triangle` from x (0 when the triangle does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
+    // A sun: its photons start on a disc covering the scene, placed by sample_emission's u1, u2 (an
+    // area-preserving map), which an EmissionGuide may redistribute.
+    bool emits_from_disc(size_t i) const {
+        return sources_[i].kind == Kind::light && sources_[i].light->kind == LightKind::sun;
+    }
+
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
     // The returned pdf is set for scene lights and emissive surfaces; the world's cosine sampling leaves it 0.
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,

@@ -24,6 +24,7 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
+    bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)
     bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
     // Progressive rendering (progressive.h): passes of new photons, jittered camera rays and a shrinking radius,
