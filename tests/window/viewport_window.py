@@ -9,6 +9,7 @@ with PHOTONSPLAT_DOC_IMAGES=<folder>, the user guide's screenshots (window, rend
 
 import math
 import os
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -109,9 +110,11 @@ def steps():
 def doc_screenshots(window, folder):
     """The user guide's pictures: the whole window with the viewport, and the engine's panels."""
     folder.mkdir(parents=True, exist_ok=True)
+    # The viewport picture is the screenshot the test just checked. (Taken again after the window screenshot it
+    # can show a restarted refinement's first image: the screenshot operator redraws the window.)
+    shutil.copyfile(ARTIFACTS / "viewport_caustic.png", folder / "viewport_caustic.png")
     bw.screenshot_window(window, folder / "viewport_window.png")
     window, area, region, space = bw.view3d()
-    bw.screenshot_area(window, area, folder / "viewport_caustic.png")
     # The panels, readable: the big viewport area turned into a Properties editor for the shots.
     area.type = 'PROPERTIES'
     settings = bpy.context.scene.photonsplat
