@@ -23,10 +23,18 @@ using namespace ps_py;
 
 namespace {
 
+// Python ints of any sign reach the core's unsigned pass count only through here, so -1 is named, not wrapped.
+uint32_t pass_count(int64_t passes) {
+    if (passes < 0 || passes > 1'000'000)
+        throw ps::InvalidInput("passes", "must be in [0, 1000000] (0 = until time_limit), got " + std::to_string(passes));
+    return static_cast<uint32_t>(passes);
+}
+
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
-                                 bool guide_photons) {
+                                 int64_t passes, double time_limit, float alpha, bool guide_photons,
+                                 bool caustics_pass, bool transparent) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -39,7 +47,12 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.passes = pass_count(passes);
+    s.time_limit = time_limit;
+    s.alpha = alpha;
     s.guide_photons = guide_photons;
+    s.caustics_pass = caustics_pass;
+    s.transparent = transparent;
     ps::validate(s);
     return s;
 }
@@ -52,10 +65,7 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
         progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, settings, control); });
     py::array_t<float> image = image_array(r.rgba, r.height, r.width, 4);
     if (!passes) return py::make_tuple(image, stats_dict(r.stats));
-    py::dict components("emission"_a = image_array(r.emission, r.height, r.width, 3),
-                        "direct"_a = image_array(r.direct, r.height, r.width, 3),
-                        "indirect"_a = image_array(r.indirect, r.height, r.width, 3));
-    return py::make_tuple(image, stats_dict(r.stats), components);
+    return py::make_tuple(image, stats_dict(r.stats), pass_images(r));
 }
 
 }  // namespace
@@ -171,7 +181,9 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "guide_photons"_a = true)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
+             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
+             "transparent"_a = false)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -187,26 +199,45 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_property(
+            "passes", [](const ps::RenderSettings& s) { return s.passes; },
+            [](ps::RenderSettings& s, int64_t v) { s.passes = pass_count(v); },
+            "Progressive passes; 1 = the one-shot method, 0 = until time_limit")
+        .def_readwrite("time_limit", &ps::RenderSettings::time_limit,
+                       "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
+        .def_readwrite("alpha", &ps::RenderSettings::alpha,
+                       "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
         .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
                        "Emit sun photons where pilot paths found them stored; unbiased (default True)")
+        .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
+                       "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
+        .def_readwrite("transparent", &ps::RenderSettings::transparent,
+                       "Film transparency: alpha 0 and no background where camera rays escape to the world")
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
-              << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ")";
+              << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False")
+              << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
+              << ", transparent=" << (s.transparent ? "True" : "False") << ")";
             return o.str();
         });
 
     m.def("render", &render, "scene"_a, "camera"_a, "settings"_a = ps::RenderSettings(), "progress"_a = py::none(),
           "passes"_a = false,
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
-          "with passes=True also a dict of 'emission', 'direct', 'indirect' (H, W, 3). progress(stage, fraction) "
-          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
+          "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
+          "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
+          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
+          "settings.passes != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
+          "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
 
     bind_images(m);
     bind_metrics(m);
     bind_reference(m);
     bind_translation(m);
+    bind_progressive(m);
 }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # README command (2): install what is missing, build, and run every test: the native GoogleTest suite (ctest),
-# the Python API tests (pytest on /usr/bin/python3) and the Blender tests (pytest inside blender -b).
+# the Python API tests (pytest on /usr/bin/python3), the Blender tests (pytest inside blender -b) and the
+# real-window viewport test (Blender under Xvfb; its screenshot stays in build/test-artifacts/).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/install-deps.sh"
@@ -20,5 +21,8 @@ echo "== Blender tests (pytest inside blender -b)"
 (cd "$root" && BLENDER_USER_SCRIPTS="$root/build/blender" TMPDIR="$scratch" \
   blender -b --factory-startup -noaudio --python-exit-code 1 --addons photonsplat \
   --python tests/blender/run_pytest.py -- -q -p no:cacheprovider tests/blender) || status=1
+
+echo "== real-window test (Blender under Xvfb: Rendered viewport screenshot)"
+bash "$root/tests/window/run.sh" || status=1
 
 exit $status

@@ -27,6 +27,7 @@ try:
         METHODS,
         Camera,
         Cancelled,
+        Progressive,
         RenderSettings,
         Scene,
         RELMSE_EPSILON,

@@ -13,6 +13,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/photons.h"
+#include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/view_samples.h"
@@ -22,6 +23,8 @@ namespace ps {
 namespace {
 
 constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyond any machine we target
+constexpr uint32_t kMaxPasses = 1'000'000;      // r shrinks as passes^(−1/6): far past any useful radius
+constexpr double kMaxTimeLimit = 1e7;           // seconds, about 4 months
 
 template <typename T>
 void require(bool ok, const std::string& field, const std::string& what, T value) {
@@ -34,13 +37,17 @@ std::string gib(double bytes) {
     return text;
 }
 
+}  // namespace
+
 // Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
 // more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
 // killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
-void check_memory(const Camera& camera, uint64_t photons) {
+void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel) {
     const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag + direct + indirect + RGBA and the three passes
-    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 12 + 12 + 16 + 36);
+    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
+    // the passes, normal and depth
+    const double frame_bytes =
+        pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16 + extra_bytes_per_pixel);
     const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
     const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
     if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
@@ -53,8 +60,6 @@ void check_memory(const Camera& camera, uint64_t photons) {
                                           " of photon records, more than half of this machine's " + gib(memory) +
                                           "; lower the photon count");
 }
-
-}  // namespace
 
 void validate(const RenderSettings& s) {
     require(s.photons <= kMaxPhotons, "photons", "must be at most " + std::to_string(kMaxPhotons), s.photons);
@@ -69,6 +74,14 @@ void validate(const RenderSettings& s) {
             "must be finite and >= 0 (0 = off)", s.plane_distance);
     require(s.directional_level >= -1 && s.directional_level <= 64, "directional_level",
             "must be in [-1, 64] (-1 = chosen from the radius)", s.directional_level);
+    require(s.passes <= kMaxPasses, "passes", "must be in [0, " + std::to_string(kMaxPasses) + "] (0 = until time_limit)",
+            s.passes);
+    require(std::isfinite(s.time_limit) && s.time_limit >= 0.0 && s.time_limit <= kMaxTimeLimit, "time_limit",
+            "must be in [0, " + std::to_string(int(kMaxTimeLimit)) + "] seconds (0 = none)", s.time_limit);
+    require(s.passes > 0 || s.time_limit > 0.0, "passes",
+            "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.passes);
+    require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
+            "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
 }
 
 float default_radius(const Scene& scene, uint64_t photons) {
@@ -79,14 +92,30 @@ float default_radius(const Scene& scene, uint64_t photons) {
     return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
 }
 
-RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+uint64_t pass_seed(uint64_t seed, uint32_t pass) {
+    if (pass == 0) return seed;
+    // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
+    uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(pass) + 1));
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+float first_radius(const Scene& scene, const RenderSettings& settings) {
+    return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+}
+
+RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                         const PassParams& pass, RenderControl& control) {
     validate(settings);
     check_memory(camera, settings.photons);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     Stats& stats = result.stats;
-    const float radius = settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+    const float radius = pass.radius;
+    const uint64_t seed = pass_seed(settings.seed, pass.index);
     stats.values["radius"] = radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = width;
@@ -107,13 +136,14 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
 
         control.begin_stage("view samples", 0.02, 0.15);
         ViewSampleSettings view_settings;
-        view_settings.seed = settings.seed;
+        view_settings.seed = seed;
+        view_settings.jitter = pass.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
 
         control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
-        direct_settings.seed = settings.seed;
+        direct_settings.seed = seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
 
@@ -121,7 +151,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
-        photon_settings.seed = settings.seed;
+        photon_settings.seed = seed;
         photon_settings.guide = settings.guide_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
@@ -132,20 +162,34 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         params.emitted = std::max<uint64_t>(photons.emitted, 1);
         params.kernel = settings.kernel;
         params.directional_level = settings.directional_level;
-        std::vector<glm::vec3> indirect;
+        // The caustics pass splats the caustic photons a second time, alone, over the same view samples and
+        // hierarchy: exact (the same estimate restricted to those photons), and free when the pass is off.
+        PhotonMap caustic_photons;
+        if (settings.caustics_pass) {
+            caustic_photons.emitted = photons.emitted;
+            for (const Photon& p : photons.photons)
+                if (p.flags & kCaustic) caustic_photons.photons.push_back(p);
+        }
+        const double splat_end = settings.caustics_pass ? 0.9 : 0.98;
+        std::vector<glm::vec3> indirect, caustic;
         const std::string splat_stage = std::string("splat (") + to_string(settings.method) + ")";
         switch (settings.method) {
             case SplatMethod::brute:
             case SplatMethod::tiled:
             case SplatMethod::gather: {
-                control.begin_stage(splat_stage, 0.45, 0.98);
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::brute) return splat_brute(samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::tiled)
+                        return splat_tiled(samples, camera, map, params, control, stats);
+                    return splat_gather(samples, map, params, control, stats);
+                };
+                control.begin_stage(splat_stage, 0.45, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::brute)
-                    indirect = splat_brute(samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::tiled)
-                    indirect = splat_tiled(samples, camera, photons, params, control, stats);
-                else
-                    indirect = splat_gather(samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
             case SplatMethod::cluster:
@@ -166,14 +210,25 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();
-                control.begin_stage(splat_stage, 0.5, 0.98);
+                // Progressive passes: an explicit directional level would keep its blocks however small r gets, so
+                // once the leaves outgrow the radius the automatic rule takes over, and it splats exactly.
+                if (settings.method == SplatMethod::directional && pass.index > 0 && params.directional_level >= 0 &&
+                    directional_leaves_exceed_radius(hierarchy, radius))
+                    params.directional_level = -1;
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::cluster)
+                        return splat_cluster(hierarchy, samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::cluster_cone)
+                        return splat_cluster_cone(hierarchy, samples, map, params, control, stats);
+                    return splat_directional(hierarchy, samples, map, params, control, stats);
+                };
+                control.begin_stage(splat_stage, 0.5, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::cluster)
-                    indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::cluster_cone)
-                    indirect = splat_cluster_cone(hierarchy, samples, photons, params, control, stats);
-                else
-                    indirect = splat_directional(hierarchy, samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
         }
@@ -187,23 +242,47 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         result.emission.assign(pixels * 3, 0.0f);
         result.direct.assign(pixels * 3, 0.0f);
         result.indirect.assign(pixels * 3, 0.0f);
-        for (size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+        if (settings.caustics_pass) result.caustics.assign(pixels * 3, 0.0f);
+        result.normal.assign(pixels * 3, 0.0f);
+        result.depth.assign(pixels, RenderResult::kNoDepth);
+        for (size_t p = 0; p < pixels; ++p) {
+            // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles):
+            // the background seen through glass or in mirrors stays.
+            const bool escaped = samples.alpha[p] == 0.0f;
+            if (!(settings.transparent && escaped))
+                for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+            if (!escaped) {
+                for (int c = 0; c < 3; ++c) result.normal[3 * p + c] = samples.first_normal[p][c];
+                result.depth[p] = samples.first_depth[p];
+            }
+        }
         for (size_t i = 0; i < samples.samples.size(); ++i) {
             const size_t p = samples.samples[i].pixel;
             for (int c = 0; c < 3; ++c) {
                 result.direct[3 * p + c] = direct[i][c];
                 result.indirect[3 * p + c] = indirect[i][c];
+                if (settings.caustics_pass) result.caustics[3 * p + c] = caustic[i][c];
             }
         }
         for (size_t p = 0; p < pixels; ++p) {
             for (int c = 0; c < 3; ++c)
                 result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
-            result.rgba[4 * p + 3] = 1.0f;  // film transparency is not offered yet: the background is opaque
+            result.rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
         }
-        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
+        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size() + result.caustics.size() +
+                                                    result.normal.size() + result.depth.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);
+    return result;
+}
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+    validate(settings);
+    if (settings.passes != 1) return render_progressive(scene, camera, settings, control);
+    PassParams pass;
+    pass.radius = first_radius(scene, settings);
+    RenderResult result = render_pass(scene, camera, settings, pass, control);
+    result.stats.values["passes"] = 1.0;
     return result;
 }
 

@@ -37,14 +37,19 @@ class ExportedFrame:
 
 
 def export_frame(core, depsgraph, camera_override=None):
-    """Convert the evaluated scene of `depsgraph` for one frame. `camera_override` replaces scene.camera."""
+    """Convert the evaluated scene of `depsgraph` for one frame. `camera_override` replaces scene.camera.
+
+    With a render border, the camera covers only the border's pixels and width/height are the border's size."""
     scene = depsgraph.scene
     notes = []
 
     # The camera first: without one there is nothing to render, so fail before the costly geometry export.
-    width, height = camera.resolution(scene)
+    full_width, full_height = camera.resolution(scene)
+    region = camera.border_region(scene, full_width, full_height)
+    width, height = region[2] - region[0], region[3] - region[1]
     try:
-        core_camera = camera.export_camera(core, depsgraph, camera_override or scene.camera, width, height, notes)
+        core_camera = camera.export_camera(core, depsgraph, camera_override or scene.camera, full_width,
+                                           full_height, notes, region=region)
     except camera.CameraError as error:
         raise ExportError(str(error)) from None
 
@@ -83,12 +88,16 @@ def export_frame(core, depsgraph, camera_override=None):
     return frame
 
 
-def render_settings(core, props):
-    """scene.photonsplat -> core RenderSettings, field by field (the core validates the values)."""
-    return core.RenderSettings(photons=props.photons, radius=props.radius, method=props.method,
-                               max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
-                               direct_samples=props.direct_samples, kernel=props.kernel,
-                               directional_level=props.directional_level)
+def render_settings(core, props, **overrides):
+    """scene.photonsplat -> core RenderSettings, field by field (the core validates the values). `overrides`
+    set fields that do not come from scene.photonsplat (caustics_pass, transparent) or replace some that do."""
+    fields = dict(photons=props.photons, radius=props.radius, method=props.method,
+                  max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
+                  direct_samples=props.direct_samples, kernel=props.kernel,
+                  directional_level=props.directional_level, passes=props.passes,
+                  time_limit=props.time_limit)
+    fields.update(overrides)
+    return core.RenderSettings(**fields)
 
 
 class _GeometryTable:

@@ -13,6 +13,7 @@ enum class RngDomain : uint64_t {
     photon = 3,
     light_choice = 4,
     emission_guide = 5,
+    pixel_jitter = 6,       // progressive passes after the first: where in its pixel a camera ray goes
     reference_path = 16,    // reference renderer: one camera path, keyed by pass × pixels + pixel
     reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
 };

@@ -202,6 +202,18 @@ std::pair<int, bool> choose_level(const ClusterHierarchy& hierarchy, const TreeS
     return {level, false};
 }
 
+}  // namespace
+
+bool directional_leaves_exceed_radius(const ClusterHierarchy& hierarchy, float radius) {
+    if (hierarchy.empty()) return false;
+    const TreeShape shape = tree_shape(hierarchy);
+    std::vector<double> limit(size_t(shape.height[hierarchy.root]) + 1, double(radius));
+    limit[0] = kFallbackLeafDiagonal * double(radius);
+    return !median_at_most(hierarchy, shape, limit)[0];
+}
+
+namespace {
+
 // ---- facets -------------------------------------------------------------------------------------------------
 
 // The samples of one orientation in a cut node: what the traversal tests and what shading needs.
