@@ -60,10 +60,12 @@ def measure_moves(session, ob, label):
         refined = drawn_after(session, moved_at, restart, REFINED_PASSES)
         sync = session.last_sync
         rows.append(dict(first_image_s=first, refined_s=refined, meshes_exported=sync.meshes,
-                         lights_exported=sync.lights, instances_moved=sync.moved, scene_rebuilt=sync.rebuilt))
+                         lights_exported=sync.lights, instances_moved=sync.moved, scene_rebuilt=sync.rebuilt,
+                         main_thread_wait_s=session.release_seconds))
         print(f"viewport_timing: {label} {move + 1}: first image {first * 1000:.0f} ms, "
               f"{REFINED_PASSES} passes {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights}, "
-              f"instances moved {sync.moved}, scene rebuilt {sync.rebuilt})")
+              f"instances moved {sync.moved}, scene rebuilt {sync.rebuilt}, main thread waited "
+              f"{session.release_seconds * 1000:.0f} ms for the refinement to stop)")
         yield 0.3
     return rows
 

@@ -82,6 +82,7 @@ class ViewportSession:
         self.refinement = None
         self.error = None
         self.last_sync = None         # SyncReport of the last view_update
+        self.release_seconds = 0.0    # main-thread wait for the refinement to stop, last in-place update
         self._view = None
         self._make_camera = None
         self._texture = None
@@ -114,13 +115,16 @@ class ViewportSession:
         """Before the cache changes the core scene in place (moved objects, lights): the running refinement
         must be done with it. Stops it and waits up to RELEASE_WAIT s on the main thread (a pass polls its
         cancel flag about 10x a second); False when it is still running, and the cache builds a new scene."""
+        self.release_seconds = 0.0
         if self.refinement is None:
             return True
+        started = time.perf_counter()
         self.refinement.stop()
-        if not self.refinement.join(RELEASE_WAIT):
-            return False
-        self.refinement = None
-        return True
+        stopped = self.refinement.join(RELEASE_WAIT)
+        self.release_seconds = time.perf_counter() - started
+        if stopped:
+            self.refinement = None
+        return stopped
 
     # --- view_draw --------------------------------------------------------------------------------------
     def draw(self, engine, context, depsgraph):
