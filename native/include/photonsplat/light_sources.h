@@ -28,7 +28,6 @@ public:
     // Solid-angle density with which sample_incidence of the emissive surfaces draws the point y of
     // `triangle` from x (0 when the triangle does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
-
     // A sun: its photons start on a disc covering the scene, placed by sample_emission's u1, u2 (an
     // area-preserving map), which an EmissionGuide may redistribute.
     bool emits_from_disc(size_t i) const {

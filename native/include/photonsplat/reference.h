@@ -55,8 +55,8 @@ struct ReferenceSettings {
 
 void validate(const ReferenceSettings& settings);  // throws InvalidInput naming the field
 
-// The automatic first-pass radius: a quarter of render()'s default radius for that many photons (caustics are
-// sharp, and the reference has many passes to average the noise of a small radius out).
+// The automatic first-pass radius: half of render()'s default radius for that many photons (caustics are
+// sharp; the radius then shrinks pass after pass, and the passes average the noise out).
 float default_caustic_radius(const Scene& scene, uint64_t photons_per_pass);
 
 struct ReferenceResult {

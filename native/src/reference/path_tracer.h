@@ -26,6 +26,7 @@ struct PathTracerContext {
 struct PathCounters {
     uint64_t rays = 0;         // closest-hit rays
     uint64_t shadow_rays = 0;
+    uint64_t non_finite = 0;   // path samples dropped because they came out NaN or infinite
 };
 
 // Radiance arriving at the camera along `ray` (one sample of one camera path).

@@ -56,7 +56,7 @@ void validate(const ReferenceSettings& s) {
 }
 
 float default_caustic_radius(const Scene& scene, uint64_t photons_per_pass) {
-    return 0.25f * default_radius(scene, photons_per_pass);
+    return 0.5f * default_radius(scene, photons_per_pass);
 }
 
 ReferenceResult render_reference(const Scene& scene, const Camera& camera, const ReferenceSettings& settings,
@@ -132,7 +132,11 @@ ReferenceResult render_reference(const Scene& scene, const Camera& camera, const
                             Rng rng(settings.seed, RngDomain::reference_path, static_cast<uint64_t>(pass) * pixels + pixel);
                             const float jx = rng.uniform(), jy = rng.uniform();  // box filter over the pixel
                             const glm::vec3 l = trace_reference_path(context, camera.generate_ray(x + jx, y + jy), rng, local);
-                            if (std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z)) sum[pixel] += glm::dvec3(l);
+                            // A non-finite sample (degenerate geometry) would poison the pixel for good: drop and count it.
+                            if (std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))
+                                sum[pixel] += glm::dvec3(l);
+                            else
+                                ++local.non_finite;
                         }
                 });
             }
@@ -152,7 +156,9 @@ ReferenceResult render_reference(const Scene& scene, const Camera& camera, const
         for (const PathCounters& c : counters) {
             all.rays += c.rays;
             all.shadow_rays += c.shadow_rays;
+            all.non_finite += c.non_finite;
         }
+        stats.counters["non_finite_samples"] = static_cast<double>(all.non_finite);
         stats.counters["rays"] = static_cast<double>(all.rays);
         stats.counters["shadow_rays"] = static_cast<double>(all.shadow_rays);
         stats.counters["camera_paths"] = static_cast<double>(pixels) * passes;
