@@ -100,7 +100,9 @@ class ViewportSession:
         try:
             settings = refine_settings(self.core, depsgraph.scene)
             self.last_sync = self.cache.sync(self.core, depsgraph, release=self._release_scene)
-            changed = self.last_sync.changed or self.scene is None or settings != self.settings
+            # (A refinement stopped for an in-place change is restarted even if the change showed nothing.)
+            changed = (self.last_sync.changed or self.scene is None or settings != self.settings
+                       or self.refinement is None)
             self.settings = settings
             self.scene = self.cache.scene
             self.error = None

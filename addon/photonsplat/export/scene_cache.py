@@ -141,8 +141,10 @@ class SceneCache:
             report.world = True
 
         reason = self._rebuild_reason(layout, report)
+        # (An instance of a mesh without faces is not in the core scene: its moves change nothing.)
         moved = [name for name, (_, matrix) in layout.items()
-                 if not np.array_equal(matrix, self._layout[name][1])] if not reason else []
+                 if name in self._instance_ids and not np.array_equal(matrix, self._layout[name][1])
+                 ] if not reason else []
         in_place = bool(moved or lights_changed or world_changed)
         if not reason and in_place and release is not None and not release():
             reason = "the running render did not stop in time"
@@ -152,9 +154,8 @@ class SceneCache:
         elif in_place:
             scene = self.scene
             for name in moved:
-                if name in self._instance_ids:       # (an instance of a mesh without faces is not in the core)
-                    scene.set_instance_transform(self._instance_ids[name], layout[name][1])
-                    report.moved += 1
+                scene.set_instance_transform(self._instance_ids[name], layout[name][1])
+            report.moved = len(moved)
             self.transform_updates += report.moved
             if lights_changed:
                 scene.clear_lights()
