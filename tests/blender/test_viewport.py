@@ -116,6 +116,25 @@ def test_moved_object_moves_its_instance_only(caustics_scene, core):
     assert not {"add_mesh_data", "add_instance", "add_mesh", "add_material"} & set(new_calls)
 
 
+def test_added_and_removed_objects_rebuild_from_cached_meshes(caustics_scene, core):
+    """A linked duplicate is one more instance of the same core mesh; deleting it drops the instance again."""
+    cache = SceneCache()
+    cache.sync(core, bpy.context.evaluated_depsgraph_get())
+    meshes, instances = cache.meshes, cache.instances
+    sphere = bpy.data.objects["GlassSphere"]
+    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+        twin = bpy.data.objects.new("Twin", sphere.data)
+        twin.location = (sphere.location.x + 0.5, sphere.location.y, sphere.location.z)
+        bpy.context.scene.collection.objects.link(twin)
+        reports = updates.evaluate()
+        assert any(r.rebuilt for r in reports)
+        assert (cache.meshes, cache.instances) == (meshes, instances + 1)
+        bpy.data.objects.remove(twin)
+        reports = updates.evaluate()
+        assert any(r.rebuilt for r in reports)
+        assert (cache.meshes, cache.instances) == (meshes, instances)
+
+
 def test_busy_scene_is_rebuilt_not_changed(caustics_scene, core):
     """When the running render does not release the scene in time, a new scene is built (from cached arrays:
     no mesh read) and the old one is left untouched for the render still using it."""
