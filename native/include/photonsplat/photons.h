@@ -25,7 +25,7 @@ struct Photon {
 };
 
 struct PhotonMap {
-    std::vector<Photon> photons;  // in a deterministic order (by emitted photon index)
+    std::vector<Photon> photons;  // in Morton order of position, ties by emission order: deterministic
     uint64_t emitted = 0;         // photon paths started: the density estimate divides by this
     size_t bytes() const { return photons.capacity() * sizeof(Photon); }
 };
