@@ -13,6 +13,7 @@
 #include "bindings.h"
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/memory_budget.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 
@@ -62,7 +63,8 @@ void add_mesh(ps::Scene& scene, const std::string& name, const py::object& verti
 
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
-                                 float plane_distance, const std::string& kernel, int directional_level) {
+                                 float plane_distance, const std::string& kernel, int directional_level,
+                                 uint64_t memory_budget) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -75,6 +77,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.memory_budget = memory_budget;
     ps::validate(s);
     return s;
 }
@@ -200,7 +203,8 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1,
+             "memory_budget"_a = 0)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -216,6 +220,8 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_readwrite("memory_budget", &ps::RenderSettings::memory_budget,
+                       "bytes the render may hold; 0 = 3/4 of this machine's (or container's) memory")
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
@@ -230,6 +236,9 @@ PYBIND11_MODULE(_core, m) {
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
           "with passes=True also a dict of 'emission', 'direct', 'indirect' (H, W, 3). progress(stage, fraction) "
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
+
+    m.def("default_memory_budget", &ps::default_memory_budget,
+          "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");
 
     bind_images(m);
 }

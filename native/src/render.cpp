@@ -1,9 +1,6 @@
 #include "photonsplat/render.h"
 
-#include <unistd.h>
-
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -12,6 +9,7 @@
 #include "photonsplat/direct_light.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
+#include "photonsplat/memory_budget.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
@@ -26,32 +24,6 @@ constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyo
 template <typename T>
 void require(bool ok, const std::string& field, const std::string& what, T value) {
     if (!ok) throw InvalidInput(field, what + ", got " + std::to_string(value));
-}
-
-std::string gib(double bytes) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
-    return text;
-}
-
-// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
-// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
-// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
-void check_memory(const Camera& camera, uint64_t photons) {
-    const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag + direct + indirect + RGBA and the three passes
-    const double frame_bytes = pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 12 + 12 + 16 + 36);
-    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
-    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
-    if (frame_bytes > 0.5 * memory)
-        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
-                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
-                                             gib(memory) + "; lower the resolution");
-    if (photon_bytes > 0.5 * memory)
-        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
-                                          " of photon records, more than half of this machine's " + gib(memory) +
-                                          "; lower the photon count");
 }
 
 }  // namespace
@@ -81,11 +53,13 @@ float default_radius(const Scene& scene, uint64_t photons) {
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
     validate(settings);
-    check_memory(camera, settings.photons);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     Stats& stats = result.stats;
+    // Every large structure is predicted before it is allocated: a frame that cannot fit is refused here.
+    MemoryBudget budget(settings.memory_budget, stats);
+    reserve_frame(budget, scene, camera, settings);
     const float radius = settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
     stats.values["radius"] = radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
@@ -116,6 +90,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         direct_settings.seed = settings.seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
+        stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
 
         control.begin_stage("photons", 0.35, 0.45);
         PhotonSettings photon_settings;
@@ -138,6 +113,10 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
             case SplatMethod::tiled:
             case SplatMethod::gather: {
                 control.begin_stage(splat_stage, 0.45, 0.98);
+                params.max_pairs_in_memory = fit_pair_cap(
+                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
+                                                                  photons.photons.size(), nullptr, camera,
+                                                                  settings.kernel, arena.max_concurrency()));
                 StageTimer t(stats, "splat");
                 if (settings.method == SplatMethod::brute)
                     indirect = splat_brute(samples, photons, params, control, stats);
@@ -163,6 +142,10 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();
                 control.begin_stage(splat_stage, 0.5, 0.98);
+                params.max_pairs_in_memory = fit_pair_cap(
+                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
+                                                                  photons.photons.size(), &hierarchy, camera,
+                                                                  settings.kernel, arena.max_concurrency()));
                 StageTimer t(stats, "splat");
                 if (settings.method == SplatMethod::cluster)
                     indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
@@ -174,6 +157,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
             }
         }
         control.check();
+        stats.bytes["indirect_light"] = static_cast<double>(indirect.capacity() * sizeof(glm::vec3));
 
         control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");

@@ -24,6 +24,7 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
+    uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
 };
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field
