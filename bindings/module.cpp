@@ -227,7 +227,8 @@ PYBIND11_MODULE(_core, m) {
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
-              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level << ")";
+              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
+              << ", memory_budget=" << s.memory_budget << ")";
             return o.str();
         });
 

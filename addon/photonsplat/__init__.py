@@ -27,6 +27,7 @@ try:
         Cancelled,
         RenderSettings,
         Scene,
+        default_memory_budget,
         render,
         write_image,
     )

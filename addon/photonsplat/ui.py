@@ -90,6 +90,7 @@ class RENDER_PT_photonsplat_performance(PhotonSplatPanel, Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(context.scene.photonsplat, "threads")
+        layout.prop(context.scene.photonsplat, "memory_budget")
 
 
 # --- lights, materials, world ---------------------------------------------------------------------------------

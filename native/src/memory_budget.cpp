@@ -182,7 +182,7 @@ SplatMemory predict_splat_memory(SplatMethod method, size_t samples, size_t phot
             // 8 direction bins × 6 slots of 8 bytes per node at most (the cut level has fewer), and the cut's
             // bookkeeping (facets, cuts, walk, parent/height/order) per node, the cut of every sample.
             m.fixed["direction_bins"] = nodes * 8.0 * 6.0 * 8.0;
-            m.fixed["directional_nodes"] = nodes * 96.0 + s * 4.0;
+            m.fixed["directional_nodes"] = nodes * 256.0 + s * 8.0;
             m.fixed["photon_positions"] = positions;
             // When the radius is below a leaf's size it falls back to the exact cluster splat and its pair lists.
             m.fixed["splat_sample_sums"] = sums;

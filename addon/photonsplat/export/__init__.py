@@ -87,7 +87,8 @@ def render_settings(core, props):
     return core.RenderSettings(photons=props.photons, radius=props.radius, method=props.method,
                                max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
                                direct_samples=props.direct_samples, kernel=props.kernel,
-                               directional_level=props.directional_level)
+                               directional_level=props.directional_level,
+                               memory_budget=int(props.memory_budget * 2**30))
 
 
 class _MaterialTable:
