@@ -7,7 +7,7 @@
 # PHOTONSPLAT_SANITIZE_STEPS="asan tsan fuzz" selects steps. The Python module is not built in these trees.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-steps="${PHOTONSPLAT_SANITIZE_STEPS:-asan tsan fuzz}"
+steps="${PHOTONSPLAT_SANITIZE_STEPS-asan tsan fuzz}"
 fuzz_seconds="${PHOTONSPLAT_FUZZ_SECONDS:-60}"
 jobs="$(nproc)"
 status=0

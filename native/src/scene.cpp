@@ -107,8 +107,10 @@ void Scene::add_mesh(const MeshInput& mesh) {
         tri.v2 = vertex(mesh.triangles[3 * t + 2]);
         glm::vec3 ng = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
         const float len = glm::length(ng);
-        // Zero-area (or, after a huge transform, overflowing) triangles can neither be hit nor shaded.
-        if (!(len > 0.0f) || !std::isfinite(len) || !is_finite(tri.v0) || !is_finite(tri.v1) || !is_finite(tri.v2)) {
+        // Zero-area (or, after a huge transform, overflowing or beyond kMaxCoordinate) triangles can neither be
+        // hit nor shaded.
+        if (!(len > 0.0f) || !std::isfinite(len) || !within_world(tri.v0) || !within_world(tri.v1) ||
+            !within_world(tri.v2)) {
             ++dropped_triangles_;
             continue;
         }

@@ -15,6 +15,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/memory_budget.h"
+#include "photonsplat/ray_tracer.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
@@ -594,6 +595,36 @@ TEST(HardCases, BitIdenticalImagesWithOneTwoAndEightThreadsForEveryMethod) {
             ASSERT_EQ(one.rgba, many.rgba) << to_string(method) << " with " << threads << " threads";
         }
     }
+}
+
+}  // namespace
+
+namespace {
+
+using namespace ps;
+
+// Found by fuzzing (fuzz/corpus/): a light at 3e38 made photon rays whose origin Embree's assertion refuses,
+// aborting the process. Coordinates beyond ±1e15 are now refused (lights, camera) or dropped and counted
+// (triangles), and the ray tracer ignores any ray Embree would assert on.
+TEST(HardCases, CoordinatesBeyondWhatEmbreeAcceptsAreRefusedOrDropped) {
+    Scene scene;
+    test::build_cornell_box(scene, false);
+    try {
+        scene.add_light(test::point_light("far", {0.0f, 3e38f, 0.0f}, 100.0f));
+        FAIL() << "a light at 3e38 was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(e.field(), "point light 'far'.position");
+    }
+    const size_t dropped = scene.dropped_triangles();
+    test::add_quad(scene, "huge", {0, 0, 2e18f}, {1, 0, 2e18f}, {1, 1, 2e18f}, {0, 1, 2e18f}, 0);
+    EXPECT_EQ(scene.dropped_triangles(), dropped + 2);
+    EXPECT_THROW(test::look_at({0, 2e18f, 1}, {0, 0, 1}, 4, 4), InvalidInput);
+    Hit hit;
+    const Ray bad{{0.0f, 0.0f, 3e38f}, {0.0f, 0.0f, -1.0f}};
+    EXPECT_FALSE(scene.ray_tracer().intersect(bad, 0.0f, INFINITY, hit));
+    EXPECT_FALSE(scene.ray_tracer().occluded(bad, 0.0f, INFINITY));
+    const Ray nan_ray{{0.0f, 0.0f, 1.0f}, {NAN, 0.0f, 0.0f}};
+    EXPECT_FALSE(scene.ray_tracer().intersect(nan_ray, 0.0f, INFINITY, hit));
 }
 
 }  // namespace

@@ -11,6 +11,15 @@ namespace ps {
 
 inline bool is_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// The largest world coordinate (and light size) the core accepts. Embree rejects, with an assertion that aborts
+// the process, rays whose origin or direction exceeds 1.8e18 (found by fuzzing); floats have lost all sub-metre
+// precision long before 1e15 anyway.
+constexpr float kMaxCoordinate = 1e15f;
+inline bool within_world(const glm::vec3& v) {
+    return is_finite(v) && std::fabs(v.x) <= kMaxCoordinate && std::fabs(v.y) <= kMaxCoordinate &&
+           std::fabs(v.z) <= kMaxCoordinate;
+}
+
 // Colours, radiances, intensities: every channel finite and >= 0.
 inline void require_nonnegative_rgb(const glm::vec3& v, const std::string& field) {
     if (!is_finite(v) || v.x < 0.0f || v.y < 0.0f || v.z < 0.0f)
