@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -164,6 +165,28 @@ RenderSettings make_settings(FuzzedDataProvider& in) {
     return s;
 }
 
+// What a failing input decoded to, for the report.
+void describe(const Scene& scene, const Camera& camera, const RenderSettings& s) {
+    std::fprintf(stderr, "camera %dx%d ortho %d near %g; photons %llu radius %g method %s bounces %d tau %g kappa %g\n",
+                 camera.width(), camera.height(), int(camera.orthographic()), camera.near_clip(),
+                 (unsigned long long)s.photons, s.radius, to_string(s.method), s.max_bounces, s.normal_tolerance,
+                 s.plane_distance);
+    for (const Material& m : scene.materials())
+        std::fprintf(stderr, "material %s kind %d color %g %g %g ior %g emission %g %g %g roughness %g\n",
+                     m.name.c_str(), int(m.kind), m.color.x, m.color.y, m.color.z, m.ior, m.emission.x, m.emission.y,
+                     m.emission.z, m.roughness);
+    for (const Light& l : scene.lights())
+        std::fprintf(stderr, "light %s kind %d value %g %g %g pos %g %g %g dir %g %g %g radius %g angle %g u %g %g %g v %g %g %g\n",
+                     l.name.c_str(), int(l.kind), l.value.x, l.value.y, l.value.z, l.position.x, l.position.y,
+                     l.position.z, l.direction.x, l.direction.y, l.direction.z, l.radius, l.angle, l.axis_u.x,
+                     l.axis_u.y, l.axis_u.z, l.axis_v.x, l.axis_v.y, l.axis_v.z);
+    for (const Triangle& t : scene.triangles())
+        std::fprintf(stderr, "triangle (%g %g %g) (%g %g %g) (%g %g %g) material %u\n", t.v0.x, t.v0.y, t.v0.z, t.v1.x,
+                     t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z, t.material);
+    const glm::vec3 b = scene.background();
+    std::fprintf(stderr, "background %g %g %g\n", b.x, b.y, b.z);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -177,9 +200,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const RenderSettings settings = make_settings(in);
         RenderControl control;
         const RenderResult result = render(scene, camera, settings, control);
-        for (float v : result.rgba) {
-            if (!std::isfinite(v)) {
-                std::fprintf(stderr, "non-finite pixel from an accepted render\n");
+        for (size_t i = 0; i < result.rgba.size(); ++i) {
+            if (!std::isfinite(result.rgba[i])) {
+                const size_t p = i / 4, c = std::min<size_t>(i % 4, 2);
+                std::fprintf(stderr, "non-finite pixel %zu from an accepted render: emission %g direct %g indirect %g\n",
+                             p, result.emission[3 * p + c], result.direct[3 * p + c], result.indirect[3 * p + c]);
+                describe(scene, camera, settings);
                 std::abort();
             }
         }

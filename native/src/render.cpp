@@ -181,6 +181,13 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                 result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
             result.rgba[4 * p + 3] = 1.0f;  // film transparency is not offered yet: the background is opaque
         }
+        // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
+        // float's range: say so rather than hand back a frame with infinities in it.
+        size_t overflowed = 0;
+        for (float v : result.rgba) overflowed += std::isfinite(v) ? 0 : 1;
+        if (overflowed > 0)
+            throw InvalidInput("scene", std::to_string(overflowed) + " pixel values overflowed the float range; lower "
+                                        "light strengths, emission or the background, or the scene's size");
         stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);

@@ -627,4 +627,21 @@ TEST(HardCases, CoordinatesBeyondWhatEmbreeAcceptsAreRefusedOrDropped) {
     EXPECT_FALSE(scene.ray_tracer().intersect(nan_ray, 0.0f, INFINITY, hit));
 }
 
+// Found by fuzzing: a background of 3e38 (finite, so accepted) overflowed the direct light to infinite pixels.
+// Emitted values are now bounded by 1e10 (the sun's radiance is ~2e7), and a render whose pixels still leave the
+// float range is refused instead of returned.
+TEST(HardCases, EmissionBeyond1e10IsRefusedNamingTheField) {
+    Scene scene;
+    try {
+        scene.set_background({0.0f, 7.5f, 3e38f});
+        FAIL() << "a background of 3e38 was accepted";
+    } catch (const InvalidInput& e) {
+        EXPECT_EQ(e.field(), "background");
+    }
+    EXPECT_THROW(scene.add_light(test::point_light("sunlike", {0, 0, 1}, 1e12f)), InvalidInput);
+    EXPECT_THROW(scene.add_material({"hot", MaterialKind::diffuse, glm::vec3(0.5f), 1.45f, glm::vec3(2e10f)}),
+                 InvalidInput);
+    EXPECT_NO_THROW(scene.set_background(glm::vec3(1e10f)));
+}
+
 }  // namespace

@@ -20,10 +20,15 @@ inline bool within_world(const glm::vec3& v) {
            std::fabs(v.z) <= kMaxCoordinate;
 }
 
-// Colours, radiances, intensities: every channel finite and >= 0.
+// The largest emitted value (radiance, intensity, irradiance) accepted: the sun's radiance is ~2e7. Larger finite
+// values overflowed float in the direct light (found by fuzzing: a background of 3e38 gave infinite pixels).
+constexpr float kMaxEmission = 1e10f;
+
+// Colours, radiances, intensities: every channel finite, >= 0 and <= kMaxEmission.
 inline void require_nonnegative_rgb(const glm::vec3& v, const std::string& field) {
-    if (!is_finite(v) || v.x < 0.0f || v.y < 0.0f || v.z < 0.0f)
-        throw InvalidInput(field, "each channel must be finite and >= 0");
+    if (!is_finite(v) || v.x < 0.0f || v.y < 0.0f || v.z < 0.0f || v.x > kMaxEmission || v.y > kMaxEmission ||
+        v.z > kMaxEmission)
+        throw InvalidInput(field, "each channel must be finite, >= 0 and <= 1e10");
 }
 
 }  // namespace ps
