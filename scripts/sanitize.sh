@@ -19,8 +19,8 @@ configure() {  # build dir, then extra cmake arguments
 }
 
 # The tests of the stages that run on several threads (view samples, direct light, photons, hierarchy, every
-# splat, the whole render) at sizes that keep TSan's 5-15x slowdown short.
-tsan_filter='Render.ImageIsBitIdentical*:Render.CancelStops*:HardCases.BitIdentical*:HardCases.ThinWall*:HardCases.OneMillimetre*:MemoryBudget.Tight*:Tiled.*Batch*:Gather.*Thread*:Directional.*Thread*'
+# splat, the whole render), each with 1, 2 and 8 threads or a cancel from another thread.
+tsan_filter='HardCases.BitIdentical*:Render.ImageIsBitIdentical*:Render.CancelStops*:ClusterHierarchy.Same*:ClusterHierarchy.ConesAreTheSame*:SplatCluster.SameOutput*:SplatCluster.SmallPairCap*:SplatCluster.StopsPromptly*:SplatClusterCone.TinyPairCap*:Directional.SameBits*:GatherSplat.SameOutput*:GatherSplat.StopsPromptly*:Tiled.SameOutput*:Tiled.TinyPairCap*:Splat.BruteStopsPromptly*'
 
 for step in $steps; do
   case "$step" in
