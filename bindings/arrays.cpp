@@ -103,4 +103,15 @@ py::dict stats_dict(const ps::Stats& stats) {
                     "predicted_bytes"_a = to_dict(stats.predicted_bytes));
 }
 
+py::dict pass_images(const ps::RenderResult& r) {
+    py::dict images;
+    images["emission"] = image_array(r.emission, r.height, r.width, 3);
+    images["direct"] = image_array(r.direct, r.height, r.width, 3);
+    images["indirect"] = image_array(r.indirect, r.height, r.width, 3);
+    images["normal"] = image_array(r.normal, r.height, r.width, 3);
+    images["depth"] = image_array(r.depth, r.height, r.width, 1);
+    if (!r.caustics.empty()) images["caustics"] = image_array(r.caustics, r.height, r.width, 3);
+    return images;
+}
+
 }  // namespace ps_py

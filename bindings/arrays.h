@@ -13,6 +13,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "photonsplat/render.h"
 #include "photonsplat/stats.h"
 
 namespace ps_py {
@@ -38,6 +39,10 @@ int positive_int(const py::object& obj, const std::string& field);       // Pyth
 
 // (height, width, channels) float32 copy of a row-major buffer.
 py::array_t<float> image_array(const std::vector<float>& data, int height, int width, int channels);
+
+// The per-pass images of a render: 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) and
+// 'caustics' (H, W, 3) when the render computed it.
+py::dict pass_images(const ps::RenderResult& r);
 
 py::dict to_dict(const std::map<std::string, double>& m);
 py::dict stats_dict(const ps::Stats& stats);  // {"seconds", "counters", "bytes", "values"}

@@ -5,6 +5,10 @@
 
 namespace ps_py {
 
-void bind_images(pybind11::module_& m);  // images.cpp: write_image
+void bind_images(pybind11::module_& m);       // images.cpp: write_image
+void bind_metrics(pybind11::module_& m);      // metrics.cpp: psnr, ssim, rmse, relmse
+void bind_reference(pybind11::module_& m);    // reference.cpp: render_reference
+void bind_translation(pybind11::module_& m);  // translation.cpp: meshes + instances, textures, spot lights
+void bind_progressive(pybind11::module_& m);  // progressive.cpp: Progressive (stepping, for the viewport)
 
 }  // namespace ps_py

@@ -24,46 +24,18 @@ using namespace ps_py;
 
 namespace {
 
-void add_mesh(ps::Scene& scene, const std::string& name, const py::object& vertices_obj,
-              const py::object& triangles_obj, const py::object& normals_obj, const py::object& material_ids_obj,
-              const py::object& transform_obj) {
-    const std::string where = "mesh '" + name + "'";
-    auto vertices = float_array(vertices_obj, where + ".vertices");
-    require_shape(vertices, {-1, 3}, where + ".vertices", "(N, 3)");
-    auto triangles = index_array(triangles_obj, where + ".triangles");
-    require_shape(triangles, {-1, 3}, where + ".triangles", "(M, 3)");
-    ps::MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = vertices.data();
-    mesh.vertex_count = static_cast<size_t>(vertices.shape(0));
-    mesh.triangles = triangles.data();
-    mesh.triangle_count = static_cast<size_t>(triangles.shape(0));
-    py::array_t<float, py::array::c_style> normals;
-    if (!normals_obj.is_none()) {
-        normals = float_array(normals_obj, where + ".normals");
-        if (normals.ndim() == 3) {
-            require_shape(normals, {static_cast<py::ssize_t>(mesh.triangle_count), 3, 3}, where + ".normals",
-                          "(M, 3, 3) per corner or (N, 3) per vertex");
-            mesh.normals_per_corner = true;
-        } else {
-            require_shape(normals, {static_cast<py::ssize_t>(mesh.vertex_count), 3}, where + ".normals",
-                          "(N, 3) per vertex or (M, 3, 3) per corner");
-        }
-        mesh.normals = normals.data();
-    }
-    py::array_t<int32_t, py::array::c_style> material_ids;
-    if (!material_ids_obj.is_none()) {
-        material_ids = index_array(material_ids_obj, where + ".material_ids");
-        require_shape(material_ids, {static_cast<py::ssize_t>(mesh.triangle_count)}, where + ".material_ids", "(M,)");
-        mesh.material_ids = material_ids.data();
-    }
-    if (!transform_obj.is_none()) mesh.transform = mat4(transform_obj, where + ".transform");
-    scene.add_mesh(mesh);  // validates values: NaN, index ranges, material ids
+// Python ints of any sign reach the core's unsigned pass count only through here, so -1 is named, not wrapped.
+uint32_t pass_count(int64_t passes) {
+    if (passes < 0 || passes > 1'000'000)
+        throw ps::InvalidInput("passes", "must be in [0, 1000000] (0 = until time_limit), got " + std::to_string(passes));
+    return static_cast<uint32_t>(passes);
 }
 
 ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
+                                 int64_t passes, double time_limit, float alpha, bool guide_photons,
+                                 bool caustics_pass, bool transparent,
                                  uint64_t memory_budget) {
     ps::RenderSettings s;
     s.photons = photons;
@@ -78,6 +50,12 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
     s.memory_budget = memory_budget;
+    s.passes = pass_count(passes);
+    s.time_limit = time_limit;
+    s.alpha = alpha;
+    s.guide_photons = guide_photons;
+    s.caustics_pass = caustics_pass;
+    s.transparent = transparent;
     ps::validate(s);
     return s;
 }
@@ -90,10 +68,7 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
         progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, settings, control); });
     py::array_t<float> image = image_array(r.rgba, r.height, r.width, 4);
     if (!passes) return py::make_tuple(image, stats_dict(r.stats));
-    py::dict components("emission"_a = image_array(r.emission, r.height, r.width, 3),
-                        "direct"_a = image_array(r.direct, r.height, r.width, 3),
-                        "indirect"_a = image_array(r.indirect, r.height, r.width, 3));
-    return py::make_tuple(image, stats_dict(r.stats), components);
+    return py::make_tuple(image, stats_dict(r.stats), pass_images(r));
 }
 
 }  // namespace
@@ -120,7 +95,7 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
-               const py::object& emission, float roughness) {
+               const py::object& emission, float roughness, int texture, bool holdout) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
@@ -128,16 +103,16 @@ PYBIND11_MODULE(_core, m) {
                 mat.ior = ior;
                 mat.emission = vec3(emission, "material '" + name + "'.emission");
                 mat.roughness = roughness;  // validated by the core: finite, in [0, 1]
+                mat.texture = texture;      // validated by the scene: -1 or an existing texture
+                mat.holdout = holdout;
                 return s.add_material(mat);
             },
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
-            "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f,
+            "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f, "texture"_a = -1, "holdout"_a = false,
             "Adds a material ('diffuse', 'mirror', 'glass' or 'glossy'); returns its index for material_ids. "
-            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror.")
-        .def("add_mesh", &add_mesh, "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(),
-             "material_ids"_a = py::none(), "transform"_a = py::none(),
-             "Adds a triangle mesh: vertices (N,3), triangles (M,3), optional normals (N,3) or (M,3,3), "
-             "material_ids (M,), transform (4,4) row-major object-to-world.")
+            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror. "
+            "texture: index of add_texture() whose colour at the hit's UV replaces color (-1: none). "
+            "holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,
@@ -168,7 +143,7 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_area_light",
             [](ps::Scene& s, const std::string& name, const py::object& center, const py::object& axis_u,
-               const py::object& axis_v, const py::object& radiance) {
+               const py::object& axis_v, const py::object& radiance, const std::string& shape) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::area;
@@ -176,14 +151,20 @@ PYBIND11_MODULE(_core, m) {
                 l.axis_u = vec3(axis_u, "area light '" + name + "'.axis_u");
                 l.axis_v = vec3(axis_v, "area light '" + name + "'.axis_v");
                 l.value = vec3(radiance, "area light '" + name + "'.radiance");
+                if (shape != "rectangle" && shape != "ellipse")
+                    throw ps::InvalidInput("area light '" + name + "'.shape",
+                                           "must be 'rectangle' or 'ellipse', got '" + shape + "'");
+                l.ellipse = shape == "ellipse";
                 s.add_light(l);
             },
-            "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a,
-            "One-sided rectangle with full edge vectors u, v, emitting radiance towards cross(u, v).")
+            "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a, "shape"_a = "rectangle",
+            "One-sided rectangle with full edge vectors u, v (or, shape='ellipse', the ellipse inscribed in it), "
+            "emitting radiance towards cross(u, v).")
         .def(
             "set_background", [](ps::Scene& s, const py::object& radiance) { s.set_background(vec3(radiance, "background")); },
             "radiance"_a)
-        .def_property_readonly("triangle_count", [](const ps::Scene& s) { return s.triangles().size(); })
+        .def_property_readonly("triangle_count", &ps::Scene::triangle_count,
+                               "Triangles in the world: each instance counts its mesh's.")
         .def_property_readonly("dropped_triangles", &ps::Scene::dropped_triangles,
                                "Degenerate (zero-area) triangles dropped on entry.")
         .def_property_readonly("material_count", [](const ps::Scene& s) { return s.materials().size(); })
@@ -203,8 +184,9 @@ PYBIND11_MODULE(_core, m) {
     py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
         .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1,
-             "memory_budget"_a = 0)
+             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
+             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
+             "transparent"_a = false, "memory_budget"_a = 0)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -222,24 +204,48 @@ PYBIND11_MODULE(_core, m) {
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
         .def_readwrite("memory_budget", &ps::RenderSettings::memory_budget,
                        "bytes the render may hold; 0 = 3/4 of this machine's (or container's) memory")
+        .def_property(
+            "passes", [](const ps::RenderSettings& s) { return s.passes; },
+            [](ps::RenderSettings& s, int64_t v) { s.passes = pass_count(v); },
+            "Progressive passes; 1 = the one-shot method, 0 = until time_limit")
+        .def_readwrite("time_limit", &ps::RenderSettings::time_limit,
+                       "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
+        .def_readwrite("alpha", &ps::RenderSettings::alpha,
+                       "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
+        .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
+                       "Emit sun photons where pilot paths found them stored; unbiased (default True)")
+        .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
+                       "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
+        .def_readwrite("transparent", &ps::RenderSettings::transparent,
+                       "Film transparency: alpha 0 and no background where camera rays escape to the world")
         .def("__repr__", [](const ps::RenderSettings& s) {
             std::ostringstream o;
             o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
-              << ", memory_budget=" << s.memory_budget << ")";
+              << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False")
+              << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
+              << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
             return o.str();
         });
 
     m.def("render", &render, "scene"_a, "camera"_a, "settings"_a = ps::RenderSettings(), "progress"_a = py::none(),
           "passes"_a = false,
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
-          "with passes=True also a dict of 'emission', 'direct', 'indirect' (H, W, 3). progress(stage, fraction) "
-          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled).");
+          "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
+          "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
+          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
+          "settings.passes != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
+          "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
 
     m.def("default_memory_budget", &ps::default_memory_budget,
           "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");
 
     bind_images(m);
+    bind_metrics(m);
+    bind_reference(m);
+    bind_translation(m);
+    bind_progressive(m);
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README command (2): install what is missing, build, and run every test: the native GoogleTest suite (ctest),
-# the Python API tests (pytest on /usr/bin/python3), the Blender tests (pytest inside blender -b), and the
-# sanitizer and fuzzing runs of scripts/sanitize.sh (ASan+UBSan suite, TSan on the threaded stages, 60 s of
+# the Python API tests (pytest on /usr/bin/python3), the Blender tests (pytest inside blender -b), the
+# real-window viewport test (Blender under Xvfb; its screenshot stays in build/test-artifacts/), and the
+# sanitizer and fuzzing runs of scripts/sanitize.sh (ASan+UBSan suite, TSan on cross-thread control, 60 s of
 # libFuzzer; PHOTONSPLAT_SANITIZE_STEPS="" skips them, e.g. for a quick local run).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -22,6 +23,9 @@ echo "== Blender tests (pytest inside blender -b)"
 (cd "$root" && BLENDER_USER_SCRIPTS="$root/build/blender" TMPDIR="$scratch" \
   blender -b --factory-startup -noaudio --python-exit-code 1 --addons photonsplat \
   --python tests/blender/run_pytest.py -- -q -p no:cacheprovider tests/blender) || status=1
+
+echo "== real-window test (Blender under Xvfb: Rendered viewport screenshot)"
+bash "$root/tests/window/run.sh" || status=1
 
 echo "== sanitizers and fuzzing (scripts/sanitize.sh)"
 bash "$root/scripts/sanitize.sh" || status=1

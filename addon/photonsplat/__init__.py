@@ -4,6 +4,8 @@ One package, two uses:
 - the scripting API, importable from plain /usr/bin/python3 (no Blender needed):
       import photonsplat as ps
       image, stats = ps.render(scene, camera, ps.RenderSettings(photons=200_000))
+      reference, _ = ps.render_reference(scene, camera, samples=256)
+      print(ps.ssim(image, reference), ps.psnr(image, reference))
 - the Blender add-on: Blender calls register(), which is the only place that imports bpy.
 """
 
@@ -25,13 +27,23 @@ try:
         METHODS,
         Camera,
         Cancelled,
+        Progressive,
         RenderSettings,
         Scene,
+        RELMSE_EPSILON,
+        psnr,
+        relmse,
         default_memory_budget,
         render,
+        render_reference,
+        rmse,
+        ssim,
         write_image,
     )
     from .cameras import look_at_camera  # noqa: F401
+    # Inside Blender: photonsplat.reference.render_reference(depsgraph, ...) renders the current scene's reference
+    # through the engine's exporter (the module imports bpy only when called).
+    from . import reference  # noqa: F401
 
     CORE_IMPORT_ERROR = None
 except ImportError as error:  # pragma: no cover - exercised only with a broken build

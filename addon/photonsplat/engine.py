@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import export
+from . import export, passes
 
 # Warnings beyond this many are summarised in one line: a scene with 500 odd materials should not bury
 # the render report.
@@ -52,6 +52,7 @@ class RenderOutcome:
     warnings: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
     seconds: float = 0.0
+    passes: list = field(default_factory=list)   # names of the passes written
 
 
 last_outcome = RenderOutcome()
@@ -60,14 +61,51 @@ last_outcome = RenderOutcome()
 class PhotonSplatRenderEngine(bpy.types.RenderEngine):
     bl_idname = "PHOTONSPLAT"
     bl_label = "Photon Splat"
-    bl_use_preview = False               # no fast material-preview path yet
+    # Material/world/light preview thumbnails stay off on purpose: Blender 3.4 re-renders them in a job on every
+    # edit and for every thumbnail, and each would be a full photon render of the preview .blend (whose checker
+    # floor and world we only approximate, with notes). The Material Preview shading mode uses EEVEE
+    # (bl_use_eevee_viewport). See docs/translation.md.
+    bl_use_preview = False
     bl_use_eevee_viewport = True         # Material Preview stays EEVEE
     bl_use_shading_nodes_custom = False  # keep Cycles' shader nodes and the Shader Editor
     bl_use_postprocess = True            # let the compositor run on our result
 
+    # --- viewport (Rendered shading): viewport.py does the work, off the main thread ----------------------
+    _viewport = None
+
+    def view_update(self, context, depsgraph):
+        try:
+            if self._viewport is None:
+                from . import viewport
+                self._viewport = viewport.ViewportSession(load_core())
+            self._viewport.update(self, depsgraph)
+        except CoreUnavailable as error:
+            self.update_stats("", f"Photon Splat | {error}")
+        except Exception:            # never into Blender's draw loop
+            traceback.print_exc()
+
+    def view_draw(self, context, depsgraph):
+        if self._viewport is None:
+            return
+        try:
+            self._viewport.draw(self, context, depsgraph)
+        except Exception:
+            traceback.print_exc()
+
+    def __del__(self):
+        # Blender frees the engine when the viewport leaves Rendered mode or closes: stop its rendering.
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:
+            viewport.stop()
+
+    # --- final render ---------------------------------------------------------------------------------------
+    def update_render_passes(self, scene=None, renderlayer=None):
+        passes.register_passes(self, scene, renderlayer)
+
     def render(self, depsgraph):
         global last_outcome
         started = time.perf_counter()
+        # The whole frame: with a render border Blender hands back a result of the border's size only.
         width, height = export.camera.resolution(depsgraph.scene)
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         outcome = RenderOutcome()
@@ -89,6 +127,9 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         core = load_core()
         self.update_stats("", "Photon Splat | Exporting scene")
         frame = export.export_frame(core, depsgraph, camera_override=self.camera_override)
+        view_layer = depsgraph.view_layer
+        frame.settings.transparent = depsgraph.scene.render.film_transparent
+        frame.settings.caustics_pass = view_layer.photonsplat.use_pass_caustics
         outcome.warnings = frame.warnings
         self._report_warnings(frame.warnings)
         if self._cancel_requested():
@@ -100,25 +141,49 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
             self.update_stats("", f"Photon Splat | {stage} {100.0 * fraction:.0f}%")
             return self._cancel_requested()
 
+        components = None
         try:
-            image, stats = core.render(frame.scene, frame.camera, frame.settings, progress=on_progress)
+            image, stats, components = self._render_passes(core, frame, result, on_progress,
+                                                           passes.needs_components(view_layer))
         except core.Cancelled:
             self._cancelled(outcome)
             return
 
-        image = np.asarray(image, dtype=np.float32)
-        if image.shape != (frame.height, frame.width, 4):
-            raise RuntimeError(f"the core returned an image of shape {image.shape}, "
-                               f"expected {(frame.height, frame.width, 4)}")
-        # The core's row 0 is the top of the image; Blender's is the bottom.
-        pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
-        result.layers[0].passes["Combined"].rect.foreach_set(pixels)
-
+        _write_pixels(result, frame, image)
+        outcome.passes = ["Combined", *passes.write_passes(result.layers[0], components, frame.width, frame.height)]
         outcome.status = "finished"
         outcome.stats = stats
         outcome.message = _summary(frame, stats, depsgraph.scene.photonsplat.photons)
         self.update_progress(1.0)
         self.update_stats("", f"Photon Splat | {outcome.message}")
+
+    def _render_passes(self, core, frame, result, on_progress, components):
+        """(image, stats, per-pass images or None). One pass: core.render. Progressive (passes != 1): one pass at
+        a time, the running mean shown after each; Esc after the first pass keeps the mean so far (stats values
+        'cancelled' = 1). `components`: whether the render passes beyond Combined are wanted."""
+        _check_result_size(result, frame)
+        if frame.settings.passes == 1:
+            if components:
+                return core.render(frame.scene, frame.camera, frame.settings, progress=on_progress, passes=True)
+            return (*core.render(frame.scene, frame.camera, frame.settings, progress=on_progress), None)
+        progressive = core.Progressive(frame.scene, frame.camera, frame.settings)
+        cancelled = False
+        while not progressive.finished and not cancelled:
+            try:
+                progressive.step(progress=on_progress)
+            except core.Cancelled:
+                if progressive.passes_done == 0:
+                    raise
+                cancelled = True
+            else:
+                _write_pixels(result, frame, progressive.image())
+                self.update_result(result)
+                # A pass shorter than the core's progress poll (0.1 s) never asks: ask between passes too.
+                cancelled = self._cancel_requested()
+        stats = progressive.stats()
+        if cancelled:
+            stats["values"]["cancelled"] = 1.0
+        return progressive.image(), stats, progressive.passes() if components else None
 
     def _cancel_requested(self):
         """True once the user pressed Esc. (A separate method so tests can simulate Esc: Blender looks up
@@ -146,6 +211,23 @@ def _describe(error):
     return f"{type(error).__name__}: {text}"
 
 
+def _check_result_size(result, frame):
+    combined = result.layers[0].passes["Combined"]
+    if len(combined.rect) != frame.width * frame.height:
+        raise RuntimeError(f"Blender's result holds {len(combined.rect)} pixels, the render "
+                           f"{frame.width}x{frame.height}: the render border was read differently")
+
+
+def _write_pixels(result, frame, image):
+    image = np.asarray(image, dtype=np.float32)
+    if image.shape != (frame.height, frame.width, 4):
+        raise RuntimeError(f"the core returned an image of shape {image.shape}, "
+                           f"expected {(frame.height, frame.width, 4)}")
+    # The core's row 0 is the top of the image; Blender's is the bottom.
+    pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
+    result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+
+
 def _summary(frame, stats, photons):
     """The line shown in the status bar after a render: photons, scene size, radius used, time."""
     seconds, values = stats.get("seconds", {}), stats.get("values", {})
@@ -153,12 +235,21 @@ def _summary(frame, stats, photons):
     text = f"{photons:,} photons | {frame.triangles:,} triangles | {frame.lights} lights"
     if "radius" in values:
         text += f" | radius {values['radius']:.4g}"
+    passes = int(values.get("passes", 1))
+    if passes != 1 or frame.settings.passes != 1:
+        text += f" | {passes} passes" + (" (stopped by Esc)" if values.get("cancelled") else "")
+        if "final_radius" in values:
+            text += f", final radius {values['final_radius']:.4g}"
     return text + f" | {total:.2f} s"
 
 
 def register():
+    from . import viewport
     bpy.utils.register_class(PhotonSplatRenderEngine)
+    viewport.register()
 
 
 def unregister():
+    from . import viewport
+    viewport.unregister()        # stops every viewport's thread before the class goes
     bpy.utils.unregister_class(PhotonSplatRenderEngine)

@@ -6,7 +6,7 @@ The names are part of the public interface: scripts and render farms set them.
 """
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 
 # The splatting methods of the design (docs/design.md section 2), named as the core names them.
@@ -75,6 +75,18 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
                     "-1 chooses it from the radius",
         default=-1, min=-1, soft_max=16,
     )
+    passes: IntProperty(
+        name="Passes",
+        description="Progressive passes: each traces new photons with a smaller radius and jittered pixels, and the "
+                    "image is their mean, which converges to the exact answer. 1 = the one-shot method; "
+                    "0 = as many as fit in the time limit",
+        default=1, min=0, soft_max=1000,
+    )
+    time_limit: FloatProperty(
+        name="Time Limit",
+        description="Seconds of progressive rendering (no pass is started that would end past it); 0 = no limit",
+        default=0.0, min=0.0, soft_max=600.0, unit='TIME_ABSOLUTE',
+    )
     threads: IntProperty(
         name="Threads",
         description="Number of CPU threads; 0 uses all cores",
@@ -89,12 +101,68 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
         default=0.0, min=0.0, soft_max=256.0, precision=1,
     )
 
+    # --- viewport (Rendered shading): a fast first image, then refinement in the background ---------------
+    viewport_preview_photons: IntProperty(
+        name="First Pass Photons",
+        description="Photons of the first, fast image after any change in the viewport",
+        default=20_000, min=0, soft_max=1_000_000,
+    )
+    viewport_preview_divider: IntProperty(
+        name="First Pass Pixel Size",
+        description="The first image after a change is rendered at 1/N of the viewport's resolution",
+        default=4, min=1, max=16,
+    )
+    viewport_photons: IntProperty(
+        name="Photons per Pass",
+        description="Photons of each refinement pass in the viewport (at full viewport resolution)",
+        default=100_000, min=0, soft_max=10_000_000,
+    )
+    viewport_passes: IntProperty(
+        name="Passes",
+        description="Refinement passes averaged in the viewport before it stops; 0 = no limit",
+        default=32, min=0, soft_max=1024,
+    )
+    viewport_time_limit: FloatProperty(
+        name="Time Limit",
+        description="Seconds of refinement after a change before the viewport stops; 0 = no limit",
+        default=30.0, min=0.0, soft_max=600.0, unit='TIME_ABSOLUTE',
+    )
+
+
+def _passes_changed(settings, context):
+    # Blender refreshes the passes (and the compositor's sockets) by itself only for its own toggles.
+    for view_layer in settings.id_data.view_layers:
+        if view_layer.photonsplat == settings:
+            view_layer.update_render_passes()
+
+
+class PhotonSplatViewLayerSettings(bpy.types.PropertyGroup):
+    """Photon Splat's own render passes of a view layer. Combined, Depth, Normal and Emission use Blender's
+    own toggles (view_layer.use_pass_combined / use_pass_z / use_pass_normal / use_pass_emit), as Cycles does."""
+    use_pass_direct: BoolProperty(
+        name="Direct", default=False, update=_passes_changed,
+        description="Light reaching the first diffuse surface straight from the lights (shadow rays)",
+    )
+    use_pass_indirect: BoolProperty(
+        name="Indirect", default=False, update=_passes_changed,
+        description="Light that bounced at least once: the splatted photons, caustics included",
+    )
+    use_pass_caustics: BoolProperty(
+        name="Caustics", default=False, update=_passes_changed,
+        description="Only the photons whose path was light, then mirrors/glass, then a diffuse surface "
+                    "(part of Indirect); costs a second splat of those photons",
+    )
+
 
 def register():
     bpy.utils.register_class(PhotonSplatSceneSettings)
+    bpy.utils.register_class(PhotonSplatViewLayerSettings)
     bpy.types.Scene.photonsplat = PointerProperty(type=PhotonSplatSceneSettings, name="Photon Splat")
+    bpy.types.ViewLayer.photonsplat = PointerProperty(type=PhotonSplatViewLayerSettings, name="Photon Splat")
 
 
 def unregister():
+    del bpy.types.ViewLayer.photonsplat
     del bpy.types.Scene.photonsplat
+    bpy.utils.unregister_class(PhotonSplatViewLayerSettings)
     bpy.utils.unregister_class(PhotonSplatSceneSettings)

@@ -74,6 +74,9 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         if settings.method == "directional":
             col.prop(settings, "directional_level")
         col = layout.column()
+        col.prop(settings, "passes")
+        col.prop(settings, "time_limit")
+        col = layout.column()
         col.prop(settings, "max_bounces")
         col.prop(settings, "direct_samples")
         col.prop(settings, "seed")
@@ -91,6 +94,57 @@ class RENDER_PT_photonsplat_performance(PhotonSplatPanel, Panel):
         layout.use_property_decorate = False
         layout.prop(context.scene.photonsplat, "threads")
         layout.prop(context.scene.photonsplat, "memory_budget")
+
+
+class RENDER_PT_photonsplat_viewport(PhotonSplatPanel, Panel):
+    bl_label = "Viewport"
+    bl_context = "render"
+    bl_parent_id = "RENDER_PT_photonsplat"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.photonsplat
+        col = layout.column(heading="First Image")
+        col.prop(settings, "viewport_preview_photons", text="Photons")
+        col.prop(settings, "viewport_preview_divider", text="Pixel Size")
+        col = layout.column(heading="Refinement")
+        col.prop(settings, "viewport_photons", text="Photons per Pass")
+        col.prop(settings, "viewport_passes", text="Passes")
+        col.prop(settings, "viewport_time_limit", text="Time Limit")
+
+
+class RENDER_PT_photonsplat_film(PhotonSplatPanel, Panel):
+    bl_label = "Film"
+    bl_context = "render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.scene.render, "film_transparent", text="Transparent")
+
+
+class VIEWLAYER_PT_photonsplat_passes(PhotonSplatPanel, Panel):
+    bl_label = "Passes"
+    bl_context = "view_layer"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+        col = layout.column(heading="Data", align=True)
+        col.prop(view_layer, "use_pass_combined")
+        col.prop(view_layer, "use_pass_z", text="Depth")
+        col.prop(view_layer, "use_pass_normal")
+        col = layout.column(heading="Light", align=True)
+        col.prop(view_layer, "use_pass_emit", text="Emission")
+        col.prop(view_layer.photonsplat, "use_pass_direct")
+        col.prop(view_layer.photonsplat, "use_pass_indirect")
+        col.prop(view_layer.photonsplat, "use_pass_caustics")
 
 
 # --- lights, materials, world ---------------------------------------------------------------------------------
@@ -199,6 +253,9 @@ def _generic_panels():
 _classes = (
     RENDER_PT_photonsplat,
     RENDER_PT_photonsplat_performance,
+    RENDER_PT_photonsplat_viewport,
+    RENDER_PT_photonsplat_film,
+    VIEWLAYER_PT_photonsplat_passes,
     DATA_PT_photonsplat_light,
     MATERIAL_PT_photonsplat_surface,
     WORLD_PT_photonsplat_surface,

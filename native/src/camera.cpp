@@ -1,6 +1,8 @@
 #include "photonsplat/camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -54,6 +56,9 @@ Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width
         // z_ndc = (P22·z + P32)/(−z) = −1 at z = −near.
         near_ = projection[3][2] / (projection[2][2] - 1.0f);
     }
+    // The far plane: z_ndc = +1 at z = −far, by the same two formulas.
+    far_ = orthographic_ ? (projection[3][2] - 1.0f) / projection[2][2] : projection[3][2] / (projection[2][2] + 1.0f);
+    if (!std::isfinite(far_) || far_ <= 0.0f) far_ = std::numeric_limits<float>::infinity();
     if (!std::isfinite(near_) || (!orthographic_ && near_ <= 0.0f))
         throw InvalidInput("camera.projection", "near clip distance must be positive, got " + std::to_string(near_));
 }
@@ -69,6 +74,14 @@ Ray Camera::generate_ray(float px, float py) const {
     glm::vec3 origin = glm::vec3(to_world_ * glm::vec4(glm::vec3(near_point), 1.0f));
     glm::vec3 direction = glm::mat3(to_world_) * glm::vec3(far_point - near_point);
     return Ray{origin, glm::normalize(direction)};
+}
+
+float Camera::far_distance(const Ray& ray) const {
+    if (!std::isfinite(far_)) return std::numeric_limits<float>::infinity();
+    // Rays start on the near plane; the far plane is (far − near) further along the viewing axis.
+    const float along = glm::dot(ray.direction, forward_);
+    if (!(along > 1e-12f)) return std::numeric_limits<float>::infinity();
+    return std::max(0.0f, (far_ - near_) / along);
 }
 
 float Camera::view_depth(const glm::vec3& world_point) const {

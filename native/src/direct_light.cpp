@@ -62,7 +62,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                         if (g.pdf > 0.0f && glm::dot(g.direction, s.normal) > 0.0f) {
                             ++rays;
                             const Ray ray{offset_ray_origin(x, s.normal), g.direction};
-                            if (!tracer.occluded(ray, 0.0f, std::numeric_limits<float>::infinity()))
+                            if (!tracer.occluded(ray, 0.0f, std::numeric_limits<float>::infinity(), kShadowRays))
                                 light_sum += g.weight * scene.background();
                         }
                         if (diffuse == glm::vec3(0.0f)) continue;
@@ -75,7 +75,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                     ++rays;
                     const Ray shadow{offset_ray_origin(x, s.normal), in.wi};
                     // Stop just short of the light's own point so the light's surroundings still shadow it.
-                    if (tracer.occluded(shadow, 0.0f, in.distance * (1.0f - 1e-4f))) continue;
+                    if (tracer.occluded(shadow, 0.0f, in.distance * (1.0f - 1e-4f), kShadowRays)) continue;
                     if (!glossy)
                         light_sum += in.value * cos_shading;
                     else if (sources.is_world(l))

@@ -337,6 +337,49 @@ struct BuildNode {
 
 }  // namespace
 
+// A leaf's regular samples (finite position and normal, as the directional method counts them) summarised:
+// two passes over samples that are in cache. Normals are summed as they are (unit for any real sample); a zero
+// normal leaves the cone unbounded.
+LeafSummary summarise_leaf(const ViewSamples& samples, const std::vector<uint32_t>& order, uint32_t begin,
+                           uint32_t end) {
+    const auto regular = [](const ViewSample& s) { return is_finite(s.position) && is_finite(s.normal); };
+    glm::dvec3 position_sum(0.0), normal_sum(0.0);
+    uint32_t count = 0;
+    for (uint32_t k = begin; k != end; ++k) {
+        const ViewSample& s = samples.samples[order[k]];
+        if (!regular(s)) continue;
+        position_sum += glm::dvec3(s.position);
+        normal_sum += glm::dvec3(s.normal);
+        ++count;
+    }
+    LeafSummary summary;
+    summary.count = count;
+    if (count == 0) return summary;
+    const glm::dvec3 centroid = position_sum / double(count);
+    const double sum_length = glm::length(normal_sum);
+    const bool has_axis = sum_length > 1e-3 * count;  // as the directional method: else the normals cancel
+    const glm::dvec3 axis = has_axis ? normal_sum / sum_length : glm::dvec3(0.0);
+    double radius = 0.0, slab = 0.0, min_cos = 1.0;
+    for (uint32_t k = begin; k != end; ++k) {
+        const ViewSample& s = samples.samples[order[k]];
+        if (!regular(s)) continue;
+        const glm::dvec3 d = glm::dvec3(s.position) - centroid;
+        radius = std::max(radius, glm::length(d));
+        slab = std::max(slab, std::fabs(glm::dot(axis, d)));
+        const double length = glm::length(glm::dvec3(s.normal));
+        min_cos = std::min(min_cos, length > 0.0 ? glm::dot(axis, glm::dvec3(s.normal)) / length : -1.0);
+    }
+    // Margins for storing in float: the centroid moves by ~|centroid|·6e-8, the axis by ~1e-7 rad.
+    summary.centroid = glm::vec3(centroid);
+    const double storage = glm::length(centroid) * 1e-6;
+    summary.radius = float(radius * (1.0 + 1e-6) + storage);
+    summary.slab = float(slab * (1.0 + 1e-6) + storage + radius * 1e-6);
+    summary.normal_sum = glm::vec3(normal_sum);
+    const double angle = std::acos(std::clamp(min_cos, -1.0, 1.0)) + kLeafConeSlack;
+    summary.cone_angle = has_axis && angle < kPi ? float(angle) : float(kPi);
+    return summary;
+}
+
 ClusterKeyParams ClusterKeyParams::from_camera(const Camera& camera) {
     ClusterKeyParams params;
     params.width = camera.width();
@@ -436,10 +479,15 @@ ClusterHierarchy build_cluster_hierarchy(const ViewSamples& samples, const Clust
         i = j;
     }
     const size_t leaf_count = build.size();
+    if (options.leaf_summaries) hierarchy.leaf_summaries.resize(leaf_count);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaf_count, 256), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t l = range.begin(); l != range.end(); ++l)
+        for (size_t l = range.begin(); l != range.end(); ++l) {
             for (uint32_t k = build[l].sample_begin; k != build[l].sample_end; ++k)
                 build[l].box.add(samples.samples[hierarchy.sample_order[k]].position);
+            if (options.leaf_summaries)  // the leaf's samples were just read: summarising them now is cheap
+                hierarchy.leaf_summaries[l] = summarise_leaf(samples, hierarchy.sample_order, build[l].sample_begin,
+                                                             build[l].sample_end);
+        }
     });
 
     // Parents, one level (3 key bits) at a time, until one node is left. Every key reaches 0 after 22 shifts.

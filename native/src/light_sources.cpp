@@ -14,11 +14,11 @@ namespace ps {
 namespace {
 constexpr float kPi = 3.14159265358979323846f;
 
-glm::vec3 point_on_triangle(const Triangle& t, float u1, float u2) {
+glm::vec3 point_on_triangle(const WorldTriangle& t, float u1, float u2) {
     const float s = std::sqrt(u1);
     return (1.0f - s) * t.v0 + s * (1.0f - u2) * t.v1 + s * u2 * t.v2;
 }
-float triangle_area(const Triangle& t) { return 0.5f * glm::length(glm::cross(t.v1 - t.v0, t.v2 - t.v0)); }
+float triangle_area(const WorldTriangle& t) { return 0.5f * glm::length(glm::cross(t.v1 - t.v0, t.v2 - t.v0)); }
 }  // namespace
 
 LightSources::LightSources(const Scene& scene) : scene_(scene) {
@@ -30,15 +30,19 @@ LightSources::LightSources(const Scene& scene) : scene_(scene) {
     // Emission from both faces, like Cycles: flux of a triangle = 2 · π · area · radiance.
     double total = 0.0;
     glm::dvec3 flux(0.0);
-    const auto& triangles = scene.triangles();
-    for (uint32_t t = 0; t < triangles.size(); ++t) {
-        const glm::vec3 e = scene.materials()[triangles[t].material].emission;
-        const double w = triangle_area(triangles[t]) * luminance(e);
-        if (!(w > 0.0)) continue;
-        emitters_.push_back(t);
-        total += w;
-        emitter_cdf_.push_back(static_cast<float>(total));
-        flux += 2.0 * kPi * triangle_area(triangles[t]) * glm::dvec3(e);
+    for (uint32_t i = 0; i < scene.instances().size(); ++i) {
+        const MeshData& mesh = scene.meshes()[scene.instances()[i].mesh];
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+            const glm::vec3 e = scene.materials()[mesh.materials[t]].emission;
+            if (!(luminance(e) > 0.0f)) continue;
+            const float area = triangle_area(scene.world_triangle(i, t));
+            const double w = area * luminance(e);
+            if (!(w > 0.0) || !std::isfinite(w)) continue;  // also a flattened instance
+            emitters_.push_back({i, t});
+            total += w;
+            emitter_cdf_.push_back(static_cast<float>(total));
+            flux += 2.0 * kPi * area * glm::dvec3(e);
+        }
     }
     if (!emitters_.empty()) {
         for (size_t k = 0; k < emitters_.size(); ++k) {
@@ -51,12 +55,17 @@ LightSources::LightSources(const Scene& scene) : scene_(scene) {
     }
     // A uniform environment of radiance L sends 4π · πR² · L through the scene's bounding sphere.
     const glm::vec3 background = scene.background();
-    if (luminance(background) > 0.0f && !triangles.empty())
+    if (luminance(background) > 0.0f && scene.triangle_count() > 0)
         sources_.push_back({Kind::world, "world", 4.0f * kPi * kPi * radius_ * radius_ * background});
 }
 
 bool LightSources::is_delta(size_t i) const {
     return sources_[i].kind == Kind::light && light_is_delta(*sources_[i].light);
+}
+
+glm::vec3 LightSources::emission_of(const Emitter& e) const {
+    const MeshData& mesh = scene_.meshes()[scene_.instances()[e.instance].mesh];
+    return scene_.materials()[mesh.materials[e.triangle]].emission;
 }
 
 size_t LightSources::pick_emitter(float u) const {
@@ -71,7 +80,7 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
         case Kind::light: return sample_light_incidence(*source.light, x, u1, u2);
         case Kind::emissive_surfaces: {
             const size_t k = pick_emitter(u1);
-            const Triangle& t = scene_.triangles()[emitters_[k]];
+            const WorldTriangle t = scene_.world_triangle(emitters_[k].instance, emitters_[k].triangle);
             const glm::vec3 y = point_on_triangle(t, u2, u3);
             const glm::vec3 to_light = y - x;
             LightIncidence out;
@@ -82,8 +91,9 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
             const float cos_light = std::fabs(glm::dot(ng, out.wi));
             const float pdf_area = emitter_probability_[k] / triangle_area(t);
             out.value = (d2 > 0.0f && pdf_area > 0.0f)
-                            ? scene_.materials()[t.material].emission * (cos_light / (d2 * pdf_area))
+                            ? emission_of(emitters_[k]) * (cos_light / (d2 * pdf_area))
                             : glm::vec3(0.0f);
+            out.pdf = cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
             return out;
         }
         case Kind::world: {
@@ -99,20 +109,39 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
     return {};
 }
 
+float LightSources::emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x,
+                                 const glm::vec3& y) const {
+    // Emitters are listed by instance, then triangle: ascending in that pair.
+    const auto before = [](const Emitter& e, const Emitter& key) {
+        return e.instance < key.instance || (e.instance == key.instance && e.triangle < key.triangle);
+    };
+    const Emitter key{instance, triangle};
+    const auto found = std::lower_bound(emitters_.begin(), emitters_.end(), key, before);
+    if (found == emitters_.end() || found->instance != instance || found->triangle != triangle) return 0.0f;
+    const WorldTriangle t = scene_.world_triangle(instance, triangle);
+    const glm::vec3 to_light = y - x;
+    const float d2 = glm::dot(to_light, to_light);
+    if (!(d2 > 0.0f)) return 0.0f;
+    const glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
+    const float cos_light = std::fabs(glm::dot(ng, to_light)) / std::sqrt(d2);
+    const float pdf_area = emitter_probability_[static_cast<size_t>(found - emitters_.begin())] / triangle_area(t);
+    return cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
+}
+
 EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float u3, float u4, float u5) const {
     const Source& source = sources_[i];
     switch (source.kind) {
         case Kind::light: return sample_light_emission(*source.light, center_, radius_, u1, u2, u3, u4);
         case Kind::emissive_surfaces: {
             const size_t k = pick_emitter(u1);
-            const Triangle& t = scene_.triangles()[emitters_[k]];
+            const WorldTriangle t = scene_.world_triangle(emitters_[k].instance, emitters_[k].triangle);
             glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
             if (u5 < 0.5f) ng = -ng;  // both faces emit
             EmissionSample out;
             out.origin = offset_ray_origin(point_on_triangle(t, u2, u3), ng);
             out.direction = sample_cosine_hemisphere(ng, u4, std::fmod(2.0f * u5, 1.0f));
             // Φ_k / p_k, with Φ_k = 2π·A_k·L_k: the triangle's colour rides on the photon's power.
-            out.power = 2.0f * kPi * triangle_area(t) * scene_.materials()[t.material].emission / emitter_probability_[k];
+            out.power = 2.0f * kPi * triangle_area(t) * emission_of(emitters_[k]) / emitter_probability_[k];
             return out;
         }
         case Kind::world: {

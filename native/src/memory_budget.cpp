@@ -89,7 +89,8 @@ void MemoryBudget::release(const std::string& structure) {
 
 double predict_view_sample_bytes(int width, int height) {
     const double pixels = double(width) * double(height);
-    return pixels * double(sizeof(ViewSample) + sizeof(glm::vec3) + sizeof(float));
+    // sample, emission, alpha, first hit's normal and depth
+    return pixels * double(sizeof(ViewSample) + 2 * sizeof(glm::vec3) + 2 * sizeof(float));
 }
 
 double predict_view_sample_scratch_bytes(int width, int height) {
@@ -98,16 +99,22 @@ double predict_view_sample_scratch_bytes(int width, int height) {
 
 double predict_per_sample_light_bytes(size_t samples) { return double(samples) * double(sizeof(glm::vec3)); }
 
-double predict_image_bytes(int width, int height) {
-    return double(width) * double(height) * double(4 + 3 * 3) * sizeof(float);  // RGBA + emission, direct, indirect
+double predict_image_bytes(int width, int height, bool caustics_pass) {
+    // RGBA, emission, direct, indirect, normal, depth (+ caustics)
+    const double floats = 4 + 3 * 3 + 3 + 1 + (caustics_pass ? 3 : 0);
+    return double(width) * double(height) * floats * sizeof(float);
 }
 
-double predict_embree_bytes(size_t triangles) {
-    return double(triangles) * double(9 * sizeof(float) + 3 * sizeof(unsigned));
+double predict_embree_bytes(const Scene& scene) {
+    // Each mesh's vertex and index buffers (shared with Embree), and per instance a transform and a top-level node.
+    double bytes = 0.0;
+    for (const MeshData& mesh : scene.meshes())
+        bytes += double(mesh.positions.size()) * 3 * sizeof(float) + double(mesh.triangle_count()) * 3 * sizeof(unsigned);
+    return bytes + double(scene.instances().size()) * double(sizeof(glm::mat4) + 64);
 }
 
 double predict_photon_map_bytes(const Scene& scene, uint64_t emitted, int max_bounces) {
-    if (emitted == 0 || scene.triangles().empty()) return 0.0;  // photons are stored only on geometry
+    if (emitted == 0 || scene.triangle_count() == 0) return 0.0;  // photons are stored only on geometry
     // A photon is stored at non-specular vertices after the first; after a non-specular vertex it goes on with
     // probability at most `a` (Russian roulette on the albedo; a glossy lobe's F·G1 may reach 1).
     double a = 0.0;
@@ -133,6 +140,8 @@ double predict_hierarchy_bytes(size_t samples) {
     const double s = double(samples);
     return 2.0 * s * double(sizeof(ClusterNode)) + 2.0 * s * double(sizeof(uint32_t));  // nodes; order + leaves
 }
+
+double predict_leaf_summary_bytes(size_t samples) { return double(samples) * double(sizeof(LeafSummary)); }
 
 double predict_cone_bytes(size_t samples) { return 2.0 * double(samples) * double(sizeof(NormalCone) + 1); }
 
@@ -197,7 +206,7 @@ SplatMemory predict_splat_memory(SplatMethod method, size_t samples, size_t phot
 void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camera, const RenderSettings& settings) {
     const int w = camera.width(), h = camera.height();
     const size_t pixels = size_t(w) * size_t(h);
-    budget.reserve("embree_scene", predict_embree_bytes(scene.triangles().size()), "the scene's triangle count");
+    budget.reserve("embree_scene", predict_embree_bytes(scene), "the scene's triangle count");
     budget.reserve("view_samples", predict_view_sample_bytes(w, h), "resolution");
     budget.reserve("view_sample_scratch", predict_view_sample_scratch_bytes(w, h), "resolution");
     budget.release("view_sample_scratch");
@@ -211,8 +220,23 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
         settings.method == SplatMethod::directional)
         budget.reserve("hierarchy", predict_hierarchy_bytes(pixels), "resolution");
     if (settings.method == SplatMethod::cluster_cone) budget.reserve("cones", predict_cone_bytes(pixels), "resolution");
+    if (settings.method == SplatMethod::directional)
+        budget.reserve("leaf_summaries", predict_leaf_summary_bytes(pixels), "resolution");
     budget.reserve("indirect_light", predict_per_sample_light_bytes(pixels), "resolution");
-    budget.reserve("image", predict_image_bytes(w, h), "resolution");
+    if (settings.caustics_pass) {
+        // The caustic photons copied out of the map, and their own splat's light.
+        budget.reserve("caustic_photons", photon_map, "photons");
+        budget.reserve("caustic_light", predict_per_sample_light_bytes(pixels), "resolution");
+    }
+    budget.reserve("image", predict_image_bytes(w, h, settings.caustics_pass), "resolution");
+}
+
+void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                        double extra_bytes_per_pixel) {
+    Stats stats;
+    MemoryBudget budget(settings.memory_budget, stats);
+    budget.reserve("progressive_sums", double(camera.width()) * camera.height() * extra_bytes_per_pixel, "resolution");
+    reserve_frame(budget, scene, camera, settings);
 }
 
 uint64_t fit_pair_cap(MemoryBudget& budget, SplatMethod method, const SplatMemory& memory) {

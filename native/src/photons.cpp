@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include "photonsplat/emission_guide.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
@@ -50,17 +51,15 @@ SourceChoice choose_sources_by_power(const LightSources& sources) {
     return choice;
 }
 
-void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
-                      int max_bounces, Rng& rng, std::vector<Photon>& out) {
+// Follows one photon from its emission, appending what it stores to `out`.
+void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, int max_bounces, Rng& rng,
+                std::vector<Photon>& out) {
     const RayTracer& tracer = scene.ray_tracer();
-    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
-    const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
-    glm::vec3 power = emitted.power / source_probability;
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
-        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) return;
+        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit);
         const Material& m = *s.material;
         if (m.is_specular()) {
@@ -92,14 +91,52 @@ void trace_one_photon(const Scene& scene, const LightSources& sources, size_t so
             ray = Ray{offset_ray_origin(s.position, s.geometric_normal), step.direction};
             continue;
         }
-        const float keep = std::max({m.color.x, m.color.y, m.color.z});
+        const float keep = std::max({s.color.x, s.color.y, s.color.z});
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-        power *= m.color / keep;
+        power *= s.color / keep;
         const float v1 = rng.uniform(), v2 = rng.uniform();
         const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
         if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below the surface
         ray = Ray{offset_ray_origin(s.position, s.geometric_normal), direction};
     }
+}
+
+// One photon of `source`: its emission (redistributed by the source's guide, if any), then its path.
+void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
+                      const EmissionGuide& guide, int max_bounces, Rng& rng, std::vector<Photon>& out) {
+    float u1 = rng.uniform(), u2 = rng.uniform();
+    const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
+    // Only a guided source draws the extra number, so unguided photons are the same as they always were.
+    const float weight = guide.uniform() ? 1.0f : guide.sample(rng.uniform(), u1, u2);
+    const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
+    trace_path(scene, emitted, emitted.power * (weight / source_probability), max_bounces, rng, out);
+}
+
+// The guide of a sun (emission_guide.h): kPilotsPerCell pilot photons per cell of its (u1, u2) square, each
+// cell's usefulness the luminance of the power its pilots stored. The pilots are then thrown away.
+constexpr int kPilotsPerCell = 8;
+
+EmissionGuide learn_guide(const Scene& scene, const LightSources& sources, size_t source, int max_bounces,
+                          uint64_t seed) {
+    std::vector<double> usefulness(EmissionGuide::kCells, 0.0);
+    tbb::parallel_for(0, EmissionGuide::kCells, [&](int cell) {
+        std::vector<Photon> stored;
+        const int x = cell % EmissionGuide::kCellsPerAxis, y = cell / EmissionGuide::kCellsPerAxis;
+        for (int k = 0; k < kPilotsPerCell; ++k) {
+            const uint64_t index = (uint64_t(source) * EmissionGuide::kCells + uint64_t(cell)) * kPilotsPerCell + uint64_t(k);
+            Rng rng(seed, RngDomain::emission_guide, index);
+            const float u1 = (float(x) + rng.uniform()) / EmissionGuide::kCellsPerAxis;
+            const float u2 = (float(y) + rng.uniform()) / EmissionGuide::kCellsPerAxis;
+            const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
+            const EmissionSample emitted = sources.sample_emission(source, std::min(u1, 0.99999994f),
+                                                                   std::min(u2, 0.99999994f), u3, u4, u5);
+            trace_path(scene, emitted, glm::vec3(1.0f), max_bounces, rng, stored);
+        }
+        double sum = 0.0;
+        for (const Photon& p : stored) sum += std::max(0.0f, luminance(p.power));
+        usefulness[size_t(cell)] = sum;
+    });
+    return EmissionGuide::from_usefulness(usefulness);
 }
 
 }  // namespace
@@ -111,9 +148,18 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     map.emitted = settings.count;
     const LightSources sources(scene);
     const SourceChoice choice = choose_sources_by_power(sources);
-    if (choice.cdf.empty() || settings.count == 0 || scene.triangles().empty()) return map;
+    if (choice.cdf.empty() || settings.count == 0 || scene.triangle_count() == 0) return map;
 
     scene.ray_tracer();
+    std::vector<EmissionGuide> guides(sources.size());
+    if (settings.guide) {
+        for (size_t i = 0; i < sources.size(); ++i)
+            if (sources.emits_from_disc(i) && choice.probability[i] > 0.0f) {
+                guides[i] = learn_guide(scene, sources, i, settings.max_bounces, settings.seed);
+                stats.counters["guided_light_sources"] += guides[i].uniform() ? 0.0 : 1.0;
+            }
+        control.check();
+    }
     const uint64_t chunks = (settings.count + kChunk - 1) / kChunk;
     std::vector<std::vector<Photon>> per_chunk(chunks);
     std::atomic<bool> cancelled{false};
@@ -129,8 +175,8 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
             const float u = rng.uniform();
             const size_t l = static_cast<size_t>(std::upper_bound(choice.cdf.begin(), choice.cdf.end(), u) - choice.cdf.begin());
             const size_t which = std::min(l, choice.cdf.size() - 1);
-            trace_one_photon(scene, sources, which, choice.probability[which], settings.max_bounces, rng,
-                             per_chunk[chunk]);
+            trace_one_photon(scene, sources, which, choice.probability[which], guides[which], settings.max_bounces,
+                             rng, per_chunk[chunk]);
         }
         control.advance(++chunks_done, chunks);
     });

@@ -7,6 +7,7 @@
 #include <string>
 
 #include <embree3/rtcore.h>
+#include <glm/mat4x4.hpp>
 
 #include "photonsplat/scene.h"
 
@@ -45,65 +46,118 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
                              std::to_string(static_cast<int>(error)) + ")");
 }
 
+// A flattened instance (zero scale) has no inverse: Embree gets the identity and the geometry is disabled.
+bool is_flat(const Instance& instance) { return instance.normal_to_world == glm::mat3(0.0f); }
+
+void set_instance_transform(RTCGeometry geometry, const Instance& instance) {
+    const glm::mat4 m = is_flat(instance) ? glm::mat4(1.0f) : instance.to_world;
+    // glm is column-major: exactly Embree's RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR.
+    rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &m[0][0]);
+}
+
 }  // namespace
 
 struct RayTracer::Impl {
-    RTCScene scene = nullptr;
+    RTCScene top = nullptr;
+    std::vector<RTCScene> meshes;          // one per MeshData (nullptr when it has no triangles)
+    std::vector<RTCGeometry> instances;    // one per Instance (nullptr when its mesh is empty)
+
+    ~Impl() {
+        for (RTCGeometry g : instances)
+            if (g) rtcReleaseGeometry(g);
+        for (RTCScene s : meshes)
+            if (s) rtcReleaseScene(s);
+        if (top) rtcReleaseScene(top);
+    }
 };
 
-RayTracer::RayTracer(const std::vector<Triangle>& triangles) : impl_(new Impl) {
-    RTCDevice device = shared_device();
-    rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
-    impl_->scene = rtcNewScene(device);
-    if (!impl_->scene) {
-        delete impl_;
-        throw_on_embree_error(device, "creating a scene");
-        throw std::runtime_error("Embree: creating a scene failed");
-    }
-    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-    if (!triangles.empty()) {
-        RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * triangles.size()));
-        auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-            geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles.size()));
-        if (!vertices || !indices) {
-            rtcReleaseGeometry(geometry);
-            rtcReleaseScene(impl_->scene);
-            delete impl_;
-            throw std::runtime_error("Embree: out of memory for " + std::to_string(triangles.size()) + " triangles");
-        }
-        for (size_t t = 0; t < triangles.size(); ++t) {
-            const Triangle& tri = triangles[t];
-            const glm::vec3 corners[3] = {tri.v0, tri.v1, tri.v2};
-            for (int c = 0; c < 3; ++c) {
-                vertices[9 * t + 3 * c + 0] = corners[c].x;
-                vertices[9 * t + 3 * c + 1] = corners[c].y;
-                vertices[9 * t + 3 * c + 2] = corners[c].z;
-                indices[3 * t + c] = static_cast<unsigned>(3 * t + c);
-            }
-        }
-        rtcCommitGeometry(geometry);
-        rtcAttachGeometry(impl_->scene, geometry);
-        rtcReleaseGeometry(geometry);
-        bytes_ = triangles.size() * (9 * sizeof(float) + 3 * sizeof(unsigned));
-    }
-    rtcCommitScene(impl_->scene);
+RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances) : impl_(new Impl) {
     try {
+        RTCDevice device = shared_device();
+        rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
+        for (const MeshData& mesh : meshes) {
+            const size_t triangles = mesh.triangle_count();
+            if (triangles == 0) {
+                impl_->meshes.push_back(nullptr);
+                continue;
+            }
+            RTCScene scene = rtcNewScene(device);
+            if (!scene) throw_on_embree_error(device, "creating a mesh scene");
+            impl_->meshes.push_back(scene);
+            rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+            RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+                geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+            auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+                geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
+            if (!vertices || !indices) {
+                rtcReleaseGeometry(geometry);
+                throw std::runtime_error("Embree: out of memory for mesh '" + mesh.name + "' (" +
+                                         std::to_string(triangles) + " triangles)");
+            }
+            for (size_t i = 0; i < mesh.positions.size(); ++i) {
+                vertices[3 * i + 0] = mesh.positions[i].x;
+                vertices[3 * i + 1] = mesh.positions[i].y;
+                vertices[3 * i + 2] = mesh.positions[i].z;
+            }
+            for (size_t i = 0; i < mesh.indices.size(); ++i) indices[i] = mesh.indices[i];
+            rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
+            rtcCommitGeometry(geometry);
+            rtcAttachGeometryByID(scene, geometry, 0);
+            rtcReleaseGeometry(geometry);
+            rtcCommitScene(scene);
+            throw_on_embree_error(device, "building a mesh BVH");
+            bytes_ += mesh.positions.size() * 3 * sizeof(float) + triangles * 3 * sizeof(unsigned);
+        }
+
+        impl_->top = rtcNewScene(device);
+        if (!impl_->top) throw_on_embree_error(device, "creating the scene");
+        // Dynamic: moving instances refits the top level instead of rebuilding it from scratch.
+        rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
+        for (uint32_t i = 0; i < instances.size(); ++i) {
+            RTCScene mesh = impl_->meshes[instances[i].mesh];
+            if (!mesh) {
+                impl_->instances.push_back(nullptr);
+                continue;
+            }
+            RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtcSetGeometryInstancedScene(geometry, mesh);
+            rtcSetGeometryTimeStepCount(geometry, 1);
+            set_instance_transform(geometry, instances[i]);
+            rtcSetGeometryMask(geometry, instances[i].visibility);
+            rtcCommitGeometry(geometry);
+            // The geometry id is the instance index: hits name their instance directly.
+            rtcAttachGeometryByID(impl_->top, geometry, i);
+            if (is_flat(instances[i])) rtcDisableGeometry(geometry);
+            impl_->instances.push_back(geometry);
+        }
+        rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
+        bytes_ += instances.size() * (sizeof(glm::mat4) + 64);  // transform + a top-level BVH node, roughly
     } catch (...) {
-        rtcReleaseScene(impl_->scene);
         delete impl_;
         throw;
     }
 }
 
-RayTracer::~RayTracer() {
-    rtcReleaseScene(impl_->scene);
-    delete impl_;
+RayTracer::~RayTracer() { delete impl_; }
+
+void RayTracer::update_instances(const std::vector<Instance>& instances, const std::vector<uint32_t>& moved) {
+    for (uint32_t i : moved) {
+        RTCGeometry geometry = impl_->instances[i];
+        if (!geometry) continue;
+        set_instance_transform(geometry, instances[i]);
+        rtcCommitGeometry(geometry);
+        if (is_flat(instances[i]))
+            rtcDisableGeometry(geometry);
+        else
+            rtcEnableGeometry(geometry);
+    }
+    rtcCommitScene(impl_->top);
+    throw_on_embree_error(shared_device(), "updating instance transforms");
 }
 
-bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit) const {
+bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, uint32_t rays) const {
     if (!embree_accepts(ray, t_min, t_max)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
@@ -117,21 +171,22 @@ bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit) co
     rh.ray.tnear = t_min;
     rh.ray.tfar = t_max;
     rh.ray.time = 0.0f;
-    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.mask = rays;
     rh.ray.id = 0;
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    rtcIntersect1(impl_->top, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar;
+    hit.instance = rh.hit.instID[0];
     hit.triangle = rh.hit.primID;
     hit.u = rh.hit.u;
     hit.v = rh.hit.v;
     return true;
 }
 
-bool RayTracer::occluded(const Ray& ray, float t_min, float t_max) const {
+bool RayTracer::occluded(const Ray& ray, float t_min, float t_max, uint32_t rays) const {
     if (!embree_accepts(ray, t_min, t_max)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
@@ -145,10 +200,10 @@ bool RayTracer::occluded(const Ray& ray, float t_min, float t_max) const {
     r.tnear = t_min;
     r.tfar = t_max;
     r.time = 0.0f;
-    r.mask = 0xFFFFFFFFu;
+    r.mask = rays;
     r.id = 0;
     r.flags = 0;
-    rtcOccluded1(impl_->scene, &context, &r);
+    rtcOccluded1(impl_->top, &context, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
 }
 

@@ -11,6 +11,7 @@
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/memory_budget.h"
 #include "photonsplat/photons.h"
+#include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/view_samples.h"
@@ -20,6 +21,8 @@ namespace ps {
 namespace {
 
 constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyond any machine we target
+constexpr uint32_t kMaxPasses = 1'000'000;      // r shrinks as passes^(−1/6): far past any useful radius
+constexpr double kMaxTimeLimit = 1e7;           // seconds, about 4 months
 
 template <typename T>
 void require(bool ok, const std::string& field, const std::string& what, T value) {
@@ -41,6 +44,14 @@ void validate(const RenderSettings& s) {
             "must be finite and >= 0 (0 = off)", s.plane_distance);
     require(s.directional_level >= -1 && s.directional_level <= 64, "directional_level",
             "must be in [-1, 64] (-1 = chosen from the radius)", s.directional_level);
+    require(s.passes <= kMaxPasses, "passes", "must be in [0, " + std::to_string(kMaxPasses) + "] (0 = until time_limit)",
+            s.passes);
+    require(std::isfinite(s.time_limit) && s.time_limit >= 0.0 && s.time_limit <= kMaxTimeLimit, "time_limit",
+            "must be in [0, " + std::to_string(int(kMaxTimeLimit)) + "] seconds (0 = none)", s.time_limit);
+    require(s.passes > 0 || s.time_limit > 0.0, "passes",
+            "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.passes);
+    require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
+            "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
 }
 
 float default_radius(const Scene& scene, uint64_t photons) {
@@ -51,7 +62,22 @@ float default_radius(const Scene& scene, uint64_t photons) {
     return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
 }
 
-RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+uint64_t pass_seed(uint64_t seed, uint32_t pass) {
+    if (pass == 0) return seed;
+    // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
+    uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(pass) + 1));
+    z += 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+float first_radius(const Scene& scene, const RenderSettings& settings) {
+    return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+}
+
+RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                         const PassParams& pass, RenderControl& control) {
     validate(settings);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
@@ -60,12 +86,13 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
     // Every large structure is predicted before it is allocated: a frame that cannot fit is refused here.
     MemoryBudget budget(settings.memory_budget, stats);
     reserve_frame(budget, scene, camera, settings);
-    const float radius = settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+    const float radius = pass.radius;
+    const uint64_t seed = pass_seed(settings.seed, pass.index);
     stats.values["radius"] = radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = width;
     stats.values["height"] = height;
-    stats.counters["triangles"] = static_cast<double>(scene.triangles().size());
+    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
     stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
     stats.counters["lights"] = static_cast<double>(scene.lights().size());
 
@@ -81,13 +108,14 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
 
         control.begin_stage("view samples", 0.02, 0.15);
         ViewSampleSettings view_settings;
-        view_settings.seed = settings.seed;
+        view_settings.seed = seed;
+        view_settings.jitter = pass.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
 
         control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
-        direct_settings.seed = settings.seed;
+        direct_settings.seed = seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
         stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
@@ -96,7 +124,8 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
-        photon_settings.seed = settings.seed;
+        photon_settings.seed = seed;
+        photon_settings.guide = settings.guide_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;
@@ -106,24 +135,38 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         params.emitted = std::max<uint64_t>(photons.emitted, 1);
         params.kernel = settings.kernel;
         params.directional_level = settings.directional_level;
-        std::vector<glm::vec3> indirect;
+        // The caustics pass splats the caustic photons a second time, alone, over the same view samples and
+        // hierarchy: exact (the same estimate restricted to those photons), and free when the pass is off.
+        PhotonMap caustic_photons;
+        if (settings.caustics_pass) {
+            caustic_photons.emitted = photons.emitted;
+            for (const Photon& p : photons.photons)
+                if (p.flags & kCaustic) caustic_photons.photons.push_back(p);
+        }
+        const double splat_end = settings.caustics_pass ? 0.9 : 0.98;
+        std::vector<glm::vec3> indirect, caustic;
         const std::string splat_stage = std::string("splat (") + to_string(settings.method) + ")";
         switch (settings.method) {
             case SplatMethod::brute:
             case SplatMethod::tiled:
             case SplatMethod::gather: {
-                control.begin_stage(splat_stage, 0.45, 0.98);
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::brute) return splat_brute(samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::tiled)
+                        return splat_tiled(samples, camera, map, params, control, stats);
+                    return splat_gather(samples, map, params, control, stats);
+                };
                 params.max_pairs_in_memory = fit_pair_cap(
                     budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
                                                                   photons.photons.size(), nullptr, camera,
                                                                   settings.kernel, arena.max_concurrency()));
+                control.begin_stage(splat_stage, 0.45, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::brute)
-                    indirect = splat_brute(samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::tiled)
-                    indirect = splat_tiled(samples, camera, photons, params, control, stats);
-                else
-                    indirect = splat_gather(samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
             case SplatMethod::cluster:
@@ -135,24 +178,38 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
                     StageTimer t(stats, "hierarchy_build");
                     ClusterBuildOptions build_options;
                     build_options.normal_cones = settings.method == SplatMethod::cluster_cone;
+                    build_options.leaf_summaries = settings.method == SplatMethod::directional;
                     hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), build_options);
                 }
                 stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
+                if (!hierarchy.leaf_summaries.empty())
+                    stats.bytes["leaf_summaries"] = static_cast<double>(hierarchy.summary_bytes());
                 stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
                 stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
                 control.check();
-                control.begin_stage(splat_stage, 0.5, 0.98);
+                // Progressive passes: an explicit directional level would keep its blocks however small r gets, so
+                // once the leaves outgrow the radius the automatic rule takes over, and it splats exactly.
+                if (settings.method == SplatMethod::directional && pass.index > 0 && params.directional_level >= 0 &&
+                    directional_leaves_exceed_radius(hierarchy, radius))
+                    params.directional_level = -1;
+                auto splat = [&](const PhotonMap& map) {
+                    if (settings.method == SplatMethod::cluster)
+                        return splat_cluster(hierarchy, samples, map, params, control, stats);
+                    if (settings.method == SplatMethod::cluster_cone)
+                        return splat_cluster_cone(hierarchy, samples, map, params, control, stats);
+                    return splat_directional(hierarchy, samples, map, params, control, stats);
+                };
                 params.max_pairs_in_memory = fit_pair_cap(
                     budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
                                                                   photons.photons.size(), &hierarchy, camera,
                                                                   settings.kernel, arena.max_concurrency()));
+                control.begin_stage(splat_stage, 0.5, splat_end);
                 StageTimer t(stats, "splat");
-                if (settings.method == SplatMethod::cluster)
-                    indirect = splat_cluster(hierarchy, samples, photons, params, control, stats);
-                else if (settings.method == SplatMethod::cluster_cone)
-                    indirect = splat_cluster_cone(hierarchy, samples, photons, params, control, stats);
-                else
-                    indirect = splat_directional(hierarchy, samples, photons, params, control, stats);
+                indirect = splat(photons);
+                if (settings.caustics_pass) {
+                    control.begin_stage("caustics pass", splat_end, 0.98);
+                    caustic = splat(caustic_photons);
+                }
                 break;
             }
         }
@@ -167,19 +224,32 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         result.emission.assign(pixels * 3, 0.0f);
         result.direct.assign(pixels * 3, 0.0f);
         result.indirect.assign(pixels * 3, 0.0f);
-        for (size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+        if (settings.caustics_pass) result.caustics.assign(pixels * 3, 0.0f);
+        result.normal.assign(pixels * 3, 0.0f);
+        result.depth.assign(pixels, RenderResult::kNoDepth);
+        for (size_t p = 0; p < pixels; ++p) {
+            // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles):
+            // the background seen through glass or in mirrors stays.
+            const bool escaped = samples.alpha[p] == 0.0f;
+            if (!(settings.transparent && escaped))
+                for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
+            if (!escaped) {
+                for (int c = 0; c < 3; ++c) result.normal[3 * p + c] = samples.first_normal[p][c];
+                result.depth[p] = samples.first_depth[p];
+            }
+        }
         for (size_t i = 0; i < samples.samples.size(); ++i) {
             const size_t p = samples.samples[i].pixel;
             for (int c = 0; c < 3; ++c) {
                 result.direct[3 * p + c] = direct[i][c];
                 result.indirect[3 * p + c] = indirect[i][c];
+                if (settings.caustics_pass) result.caustics[3 * p + c] = caustic[i][c];
             }
         }
         for (size_t p = 0; p < pixels; ++p) {
             for (int c = 0; c < 3; ++c)
                 result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
-            result.rgba[4 * p + 3] = 1.0f;  // film transparency is not offered yet: the background is opaque
+            result.rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
         }
         // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
         // float's range: say so rather than hand back a frame with infinities in it.
@@ -188,9 +258,20 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
         if (overflowed > 0)
             throw InvalidInput("scene", std::to_string(overflowed) + " pixel values overflowed the float range; lower "
                                         "light strengths, emission or the background, or the scene's size");
-        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size()) * sizeof(float));
+        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size() + result.caustics.size() +
+                                                    result.normal.size() + result.depth.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);
+    return result;
+}
+
+RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
+    validate(settings);
+    if (settings.passes != 1) return render_progressive(scene, camera, settings, control);
+    PassParams pass;
+    pass.radius = first_radius(scene, settings);
+    RenderResult result = render_pass(scene, camera, settings, pass, control);
+    result.stats.values["passes"] = 1.0;
     return result;
 }
 

@@ -20,21 +20,39 @@ constexpr float kPi = 3.14159265358979323846f;
 float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
-    const Triangle& tri = scene.triangles()[hit.triangle];
-    SurfacePoint s;
+    const Instance& instance = scene.instances()[hit.instance];
+    const MeshData& mesh = scene.meshes()[instance.mesh];
+    const size_t t = hit.triangle;
     const float w = 1.0f - hit.u - hit.v;
-    s.position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
-    glm::vec3 ng = glm::normalize(glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
-    glm::vec3 ns = w * tri.n0 + hit.u * tri.n1 + hit.v * tri.n2;
-    const float len = glm::length(ns);
-    ns = (len > 1e-12f) ? ns / len : ng;
+    const glm::vec3& p0 = mesh.positions[mesh.indices[3 * t]];
+    const glm::vec3& p1 = mesh.positions[mesh.indices[3 * t + 1]];
+    const glm::vec3& p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    SurfacePoint s;
+    s.position = glm::vec3(instance.to_world * glm::vec4(w * p0 + hit.u * p1 + hit.v * p2, 1.0f));
+    // Normals go through the inverse transpose; it also keeps the winding normal's side right under mirroring.
+    glm::vec3 ng = glm::normalize(instance.normal_to_world * glm::cross(p1 - p0, p2 - p0));
+    glm::vec3 ns = ng;
+    if (!mesh.normals.empty()) {
+        ns = instance.normal_to_world * (w * mesh.normals[3 * t] + hit.u * mesh.normals[3 * t + 1] +
+                                         hit.v * mesh.normals[3 * t + 2]);
+        const float len = glm::length(ns);
+        ns = (len > 1e-12f && std::isfinite(len)) ? ns / len : ng;
+    }
     // Blender's planes are visible from both sides: orient by the ray, never trust the winding alone.
     s.entering = glm::dot(ng, ray.direction) < 0.0f;
     if (!s.entering) ng = -ng;
     if (glm::dot(ns, ng) < 0.0f) ns = -ns;
     s.geometric_normal = ng;
     s.shading_normal = ns;
-    s.material = &scene.materials()[tri.material];
+    s.material = &scene.materials()[mesh.materials[t]];
+    s.color = s.material->color;
+    if (s.material->holdout) {
+        s.color = glm::vec3(0.0f);  // absorbs whatever reaches it
+    } else if (s.material->texture >= 0) {
+        glm::vec2 uv(0.0f);
+        if (!mesh.uvs.empty()) uv = w * mesh.uvs[3 * t] + hit.u * mesh.uvs[3 * t + 1] + hit.v * mesh.uvs[3 * t + 2];
+        s.color = scene.textures()[s.material->texture].lookup(uv);
+    }
     return s;
 }
 
@@ -107,7 +125,7 @@ SpecularStep scatter_specular(const Material& material, const SurfacePoint& surf
     if (material.kind != MaterialKind::glass) {
         // Mirror, or glossy smooth enough to be one: Fresnel-Schlick with the metal's tint as F0.
         const float m = std::pow(1.0f - cos_i, 5.0f);
-        return {reflected, material.color + (glm::vec3(1.0f) - material.color) * m, false};
+        return {reflected, surface.color + (glm::vec3(1.0f) - surface.color) * m, false};
     }
     // Glass: entering the front face goes from air (1) into the material (ior); leaving goes back out.
     const float eta = surface.entering ? 1.0f / material.ior : material.ior;
@@ -116,7 +134,7 @@ SpecularStep scatter_specular(const Material& material, const SurfacePoint& surf
     if (u < reflectance) return {reflected, glm::vec3(1.0f), false};
     // Radiance's (n_t/n_i)² factor is left out: it cancels on the way in and out of closed objects.
     const glm::vec3 refracted = glm::normalize(eta * direction + (eta * cos_i - cos_t) * n);
-    return {refracted, material.color, true};
+    return {refracted, surface.color, true};
 }
 
 GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
@@ -124,7 +142,7 @@ GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface,
     // As for view samples: a shading normal turned away from the arriving direction falls back to the geometric one.
     const glm::vec3 n =
         glm::dot(surface.shading_normal, -direction) > 1e-3f ? surface.shading_normal : surface.geometric_normal;
-    const GgxSample g = sample_ggx_reflection(material.color, material.glossy_alpha(), n, -direction, u1, u2);
+    const GgxSample g = sample_ggx_reflection(surface.color, material.glossy_alpha(), n, -direction, u1, u2);
     const bool valid = g.pdf > 0.0f && glm::dot(g.direction, surface.geometric_normal) > 0.0f;
     return {g.direction, valid ? g.weight : glm::vec3(0.0f), valid};
 }

@@ -21,15 +21,58 @@ std::mutex& ray_tracer_mutex() {
     return m;
 }
 
+bool all_finite(const glm::mat4& m) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            if (!std::isfinite(m[c][r])) return false;
+    return true;
+}
+
+void require_finite_transform(const glm::mat4& m, const std::string& field) {
+    if (!all_finite(m)) throw InvalidInput(field, "contains NaN or infinity");
+    if (!within_world(glm::vec3(m[3])))
+        throw InvalidInput(field, "places the object beyond ±1e15, where rays cannot be traced");
+    // Only affine transforms place a mesh (Blender's world matrices always are).
+    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+        throw InvalidInput(field, "must be affine (last row 0, 0, 0, 1)");
+}
+
+// The normal matrix, or false when the transform flattens space (zero scale on some axis).
+bool normal_matrix(const glm::mat4& m, glm::mat3& out) {
+    const glm::mat3 linear(m);
+    const float det = glm::determinant(linear);
+    if (!(std::fabs(det) > 1e-36f) || !std::isfinite(det)) return false;
+    out = glm::transpose(glm::inverse(linear));
+    for (int c = 0; c < 3; ++c)
+        if (!is_finite(out[c])) return false;
+    return true;
+}
+
 }  // namespace
+
+size_t MeshData::bytes() const {
+    return positions.capacity() * sizeof(glm::vec3) + indices.capacity() * sizeof(uint32_t) +
+           normals.capacity() * sizeof(glm::vec3) + uvs.capacity() * sizeof(glm::vec2) +
+           materials.capacity() * sizeof(uint32_t);
+}
 
 Scene::Scene() = default;
 Scene::~Scene() = default;
 
 uint32_t Scene::add_material(const Material& material) {
-    validate(material, "material '" + material.name + "'");
+    const std::string where = "material '" + material.name + "'";
+    validate(material, where);
+    if (material.texture >= 0 && static_cast<size_t>(material.texture) >= textures_.size())
+        throw InvalidInput(where + ".texture", "is " + std::to_string(material.texture) + ", but the scene has " +
+                                                   std::to_string(textures_.size()) + " textures");
+    if (material.texture < -1) throw InvalidInput(where + ".texture", "must be -1 (none) or a texture index");
     materials_.push_back(material);
     return static_cast<uint32_t>(materials_.size() - 1);
+}
+
+uint32_t Scene::add_texture(Texture texture) {
+    textures_.push_back(std::move(texture));
+    return static_cast<uint32_t>(textures_.size() - 1);
 }
 
 void Scene::add_light(const Light& light) {
@@ -42,12 +85,8 @@ void Scene::set_background(const glm::vec3& radiance) {
     background_ = radiance;
 }
 
-void Scene::add_mesh(const MeshInput& mesh) {
+uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
     const std::string where = "mesh '" + mesh.name + "'";
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r)
-            if (!std::isfinite(mesh.transform[c][r]))
-                throw InvalidInput(where + ".transform", "contains NaN or infinity");
     if (mesh.vertex_count > 0 && mesh.vertices == nullptr) throw InvalidInput(where + ".vertices", "missing");
     if (mesh.triangle_count > 0 && mesh.triangles == nullptr) throw InvalidInput(where + ".triangles", "missing");
     if (mesh.vertex_count > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
@@ -78,66 +117,181 @@ void Scene::add_mesh(const MeshInput& mesh) {
     for (size_t i = 0; i < normal_floats; ++i)
         if (!std::isfinite(mesh.normals[i]))
             throw InvalidInput(where + ".normals", "normal " + std::to_string(i / 3) + " is NaN or infinite");
+    const size_t uv_floats = mesh.uvs ? (mesh.uvs_per_corner ? mesh.triangle_count * 6 : mesh.vertex_count * 2) : 0;
+    for (size_t i = 0; i < uv_floats; ++i)
+        if (!std::isfinite(mesh.uvs[i]))
+            throw InvalidInput(where + ".uvs", "uv " + std::to_string(i / 2) + " is NaN or infinite");
 
-    // Everything is valid: transform to world space. Normals go through the inverse transpose.
-    const glm::mat4& m = mesh.transform;
-    const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(m)));
-    const bool mirrored = glm::determinant(glm::mat3(m)) < 0.0f;
-    const uint32_t object = static_cast<uint32_t>(object_names_.size());
-    object_names_.push_back(mesh.name);
-
-    auto vertex = [&](int32_t i) {
-        const float* p = mesh.vertices + 3 * static_cast<size_t>(i);
-        return glm::vec3(m * glm::vec4(p[0], p[1], p[2], 1.0f));
-    };
-    auto normal_at = [&](size_t t, int corner, const glm::vec3& fallback) {
-        if (!mesh.normals) return fallback;
+    // Everything is valid: keep the non-degenerate triangles, with per-corner normals and UVs.
+    MeshData data;
+    data.name = mesh.name;
+    data.positions.reserve(mesh.vertex_count);
+    for (size_t i = 0; i < mesh.vertex_count; ++i)
+        data.positions.emplace_back(mesh.vertices[3 * i], mesh.vertices[3 * i + 1], mesh.vertices[3 * i + 2]);
+    auto corner_normal = [&](size_t t, int corner, const glm::vec3& fallback) {
         const float* n = mesh.normals_per_corner ? mesh.normals + 9 * t + 3 * corner
                                                  : mesh.normals + 3 * static_cast<size_t>(mesh.triangles[3 * t + corner]);
-        glm::vec3 w = normal_matrix * glm::vec3(n[0], n[1], n[2]);
-        const float len = glm::length(w);
-        return (len > 0.0f && std::isfinite(len)) ? w / len : fallback;
+        const glm::vec3 v(n[0], n[1], n[2]);
+        const float len = glm::length(v);
+        return (len > 0.0f && std::isfinite(len)) ? v / len : fallback;
     };
-
-    triangles_.reserve(triangles_.size() + mesh.triangle_count);
+    auto corner_uv = [&](size_t t, int corner) {
+        const float* uv = mesh.uvs_per_corner ? mesh.uvs + 6 * t + 2 * corner
+                                              : mesh.uvs + 2 * static_cast<size_t>(mesh.triangles[3 * t + corner]);
+        return glm::vec2(uv[0], uv[1]);
+    };
+    bool first = true;
     for (size_t t = 0; t < mesh.triangle_count; ++t) {
-        Triangle tri;
-        tri.v0 = vertex(mesh.triangles[3 * t + 0]);
-        tri.v1 = vertex(mesh.triangles[3 * t + 1]);
-        tri.v2 = vertex(mesh.triangles[3 * t + 2]);
-        glm::vec3 ng = glm::cross(tri.v1 - tri.v0, tri.v2 - tri.v0);
-        const float len = glm::length(ng);
-        // Zero-area (or, after a huge transform, overflowing or beyond kMaxCoordinate) triangles can neither be
-        // hit nor shaded.
-        if (!(len > 0.0f) || !std::isfinite(len) || !within_world(tri.v0) || !within_world(tri.v1) ||
-            !within_world(tri.v2)) {
-            ++dropped_triangles_;
+        const uint32_t i0 = mesh.triangles[3 * t], i1 = mesh.triangles[3 * t + 1], i2 = mesh.triangles[3 * t + 2];
+        const glm::vec3 &v0 = data.positions[i0], &v1 = data.positions[i1], &v2 = data.positions[i2];
+        const glm::vec3 ng_raw = glm::cross(v1 - v0, v2 - v0);
+        const float len = glm::length(ng_raw);
+        // Zero-area (or overflowing, or beyond kMaxCoordinate: Embree would assert) triangles can neither be hit
+        // nor shaded.
+        if (!(len > 0.0f) || !std::isfinite(len) || !within_world(v0) || !within_world(v1) || !within_world(v2)) {
+            ++dropped_in_meshes_;
             continue;
         }
-        ng /= len;
-        if (mirrored) ng = -ng;  // keep the winding's normal consistent with the transformed shading normals
-        tri.n0 = normal_at(t, 0, ng);
-        tri.n1 = normal_at(t, 1, ng);
-        tri.n2 = normal_at(t, 2, ng);
-        tri.material = mesh.material_ids ? static_cast<uint32_t>(mesh.material_ids[t]) : 0u;
-        tri.object = object;
-        if (triangles_.empty()) bounds_min_ = bounds_max_ = tri.v0;
-        for (const glm::vec3& v : {tri.v0, tri.v1, tri.v2}) {
-            bounds_min_ = glm::min(bounds_min_, v);
-            bounds_max_ = glm::max(bounds_max_, v);
+        data.indices.insert(data.indices.end(), {i0, i1, i2});
+        if (mesh.normals) {
+            const glm::vec3 ng = ng_raw / len;
+            for (int c = 0; c < 3; ++c) data.normals.push_back(corner_normal(t, c, ng));
         }
-        triangles_.push_back(tri);
+        if (mesh.uvs)
+            for (int c = 0; c < 3; ++c) data.uvs.push_back(corner_uv(t, c));
+        data.materials.push_back(mesh.material_ids ? static_cast<uint32_t>(mesh.material_ids[t]) : 0u);
+        if (first) data.bounds_min = data.bounds_max = v0;
+        first = false;
+        for (const glm::vec3& v : {v0, v1, v2}) {
+            data.bounds_min = glm::min(data.bounds_min, v);
+            data.bounds_max = glm::max(data.bounds_max, v);
+        }
     }
-    std::lock_guard<std::mutex> lock(ray_tracer_mutex());
-    ray_tracer_.reset();
+    // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
+    meshes_.push_back(std::move(data));
+    return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
-glm::vec3 Scene::bounds_min() const { return triangles_.empty() ? glm::vec3(-0.5f) : bounds_min_; }
-glm::vec3 Scene::bounds_max() const { return triangles_.empty() ? glm::vec3(0.5f) : bounds_max_; }
+uint32_t Scene::add_instance(uint32_t mesh, const glm::mat4& to_world, const std::string& name, uint32_t visibility) {
+    const std::string label = name.empty() ? (mesh < meshes_.size() ? meshes_[mesh].name : std::string("?")) : name;
+    const std::string where = "instance '" + label + "'";
+    if (mesh >= meshes_.size())
+        throw InvalidInput(where + ".mesh", "is " + std::to_string(mesh) + ", but the scene has " +
+                                                std::to_string(meshes_.size()) + " meshes");
+    require_finite_transform(to_world, where + ".transform");
+    if (visibility > kAllRays) throw InvalidInput(where + ".visibility", "unknown ray visibility bits");
+    if (instances_.size() >= static_cast<size_t>(std::numeric_limits<int32_t>::max()))
+        throw InvalidInput(where, "too many instances");
+    Instance instance;
+    instance.mesh = mesh;
+    instance.name = label;
+    instance.to_world = to_world;
+    instance.visibility = visibility;
+    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    instances_.push_back(std::move(instance));
+    std::lock_guard<std::mutex> lock(ray_tracer_mutex());
+    ray_tracer_.reset();
+    moved_instances_.clear();
+    return static_cast<uint32_t>(instances_.size() - 1);
+}
+
+void Scene::set_instance_transform(uint32_t id, const glm::mat4& to_world) {
+    if (id >= instances_.size())
+        throw InvalidInput("instance", "id " + std::to_string(id) + " out of range (the scene has " +
+                                           std::to_string(instances_.size()) + " instances)");
+    Instance& instance = instances_[id];
+    require_finite_transform(to_world, "instance '" + instance.name + "'.transform");
+    instance.to_world = to_world;
+    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    std::lock_guard<std::mutex> lock(ray_tracer_mutex());
+    if (ray_tracer_) moved_instances_.push_back(id);
+}
+
+void Scene::add_mesh(const MeshInput& mesh) {
+    // Check the transform before keeping the mesh, so a bad call leaves the scene as it was.
+    require_finite_transform(mesh.transform, "mesh '" + mesh.name + "'.transform");
+    const uint32_t id = add_mesh_data(mesh);
+    add_instance(id, mesh.transform, mesh.name);
+}
+
+bool Scene::instance_is_flat(const Instance& instance) const {
+    return instance.normal_to_world == glm::mat3(0.0f);
+}
+
+size_t Scene::dropped_triangles() const {
+    size_t dropped = dropped_in_meshes_;
+    for (const Instance& instance : instances_)
+        if (instance_is_flat(instance)) dropped += meshes_[instance.mesh].triangle_count();
+    return dropped;
+}
+
+size_t Scene::triangle_count() const {
+    size_t count = 0;
+    for (const Instance& instance : instances_)
+        if (!instance_is_flat(instance)) count += meshes_[instance.mesh].triangle_count();
+    return count;
+}
+
+size_t Scene::stored_triangle_count() const {
+    size_t count = 0;
+    for (const MeshData& mesh : meshes_) count += mesh.triangle_count();
+    return count;
+}
+
+size_t Scene::bytes() const {
+    size_t total = instances_.capacity() * sizeof(Instance);
+    for (const MeshData& mesh : meshes_) total += mesh.bytes();
+    for (const Texture& texture : textures_) total += texture.bytes();
+    return total;
+}
+
+WorldTriangle Scene::world_triangle(uint32_t instance, uint32_t triangle) const {
+    const Instance& inst = instances_[instance];
+    const MeshData& mesh = meshes_[inst.mesh];
+    auto corner = [&](int c) {
+        return glm::vec3(inst.to_world * glm::vec4(mesh.positions[mesh.indices[3 * triangle + c]], 1.0f));
+    };
+    return {corner(0), corner(1), corner(2)};
+}
+
+glm::vec3 Scene::bounds_min() const {
+    glm::vec3 lo(std::numeric_limits<float>::infinity());
+    for (const Instance& instance : instances_) {
+        const MeshData& mesh = meshes_[instance.mesh];
+        if (instance_is_flat(instance) || mesh.triangle_count() == 0) continue;
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                              (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                              (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+            lo = glm::min(lo, glm::vec3(instance.to_world * glm::vec4(p, 1.0f)));
+        }
+    }
+    return std::isfinite(lo.x) ? lo : glm::vec3(-0.5f);
+}
+
+glm::vec3 Scene::bounds_max() const {
+    glm::vec3 hi(-std::numeric_limits<float>::infinity());
+    for (const Instance& instance : instances_) {
+        const MeshData& mesh = meshes_[instance.mesh];
+        if (instance_is_flat(instance) || mesh.triangle_count() == 0) continue;
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                              (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                              (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+            hi = glm::max(hi, glm::vec3(instance.to_world * glm::vec4(p, 1.0f)));
+        }
+    }
+    return std::isfinite(hi.x) ? hi : glm::vec3(0.5f);
+}
 
 const RayTracer& Scene::ray_tracer() const {
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
-    if (!ray_tracer_) ray_tracer_ = std::make_unique<RayTracer>(triangles_);
+    if (!ray_tracer_) {
+        ray_tracer_ = std::make_unique<RayTracer>(meshes_, instances_);
+    } else if (!moved_instances_.empty()) {
+        ray_tracer_->update_instances(instances_, moved_instances_);
+    }
+    moved_instances_.clear();
     return *ray_tracer_;
 }
 

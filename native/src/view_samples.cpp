@@ -19,7 +19,8 @@ namespace ps {
 
 size_t ViewSamples::bytes() const {
     return samples.capacity() * sizeof(ViewSample) + emission.capacity() * sizeof(glm::vec3) +
-           alpha.capacity() * sizeof(float);
+           alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
+           first_depth.capacity() * sizeof(float);
 }
 
 namespace {
@@ -28,21 +29,30 @@ namespace {
 constexpr float kMinGlossyCosine = 1e-3f;
 
 // Follows one camera ray through mirrors and glass. Returns true and fills `sample` at the first non-specular
-// (diffuse or glossy) hit; adds emission and background seen along the way to `emitted`.
+// (diffuse or glossy) hit; adds emission and background seen along the way to `emitted`. The first hit's
+// normal and depth go to `first_normal` / `first_depth` (left untouched when the ray escapes).
 bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& rng, int max_specular_depth,
-                       ViewSample& sample, glm::vec3& emitted, float& alpha) {
+                       ViewSample& sample, glm::vec3& emitted, float& alpha, glm::vec3& first_normal,
+                       float& first_depth) {
     const RayTracer& tracer = scene.ray_tracer();
     glm::vec3 throughput(1.0f);
     for (int depth = 0;; ++depth) {
         Hit hit;
-        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) {
+        // The first segment sees what is visible to the camera, up to its far clip; later ones what is visible
+        // to indirect rays.
+        const bool first = depth == 0;
+        if (!tracer.intersect(ray, 0.0f, first ? camera.far_distance(ray) : std::numeric_limits<float>::infinity(),
+                              hit, first ? kCameraRays : kIndirectRays)) {
             emitted += throughput * scene.background();
             return false;
         }
         const SurfacePoint s = surface_at(scene, ray, hit);
-        if (depth == 0) {
+        if (first) {
+            if (s.material->holdout) return false;  // cut out: alpha stays 0, nothing is added
             alpha = 1.0f;
             sample.depth = camera.view_depth(s.position);
+            first_depth = sample.depth;
+            first_normal = s.shading_normal;  // already on the side the camera ray came from
         }
         emitted += throughput * s.material->emission;
         if (!s.material->is_specular()) {
@@ -55,7 +65,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
             if (s.material->is_glossy()) {
                 // A pure GGX lobe (no diffuse part): F0 = colour, α = roughness².
                 sample.albedo = glm::vec3(0.0f);
-                sample.specular = s.material->color;
+                sample.specular = s.color;
                 sample.roughness = s.material->glossy_alpha();
                 sample.flags |= kGlossy;
                 // Where interpolation tilts the shading normal away from the viewer (silhouettes of smooth
@@ -64,7 +74,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
                 if (!(glm::dot(sample.shading_normal, sample.wo) > kMinGlossyCosine))
                     sample.shading_normal = sample.normal;
             } else {
-                sample.albedo = s.material->color;
+                sample.albedo = s.color;
                 sample.specular = glm::vec3(0.0f);
                 sample.roughness = 0.0f;
             }
@@ -92,6 +102,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, cons
     out.origin = camera.position();
     out.emission.assign(pixels, glm::vec3(0.0f));
     out.alpha.assign(pixels, 0.0f);
+    out.first_normal.assign(pixels, glm::vec3(0.0f));
+    out.first_depth.assign(pixels, 0.0f);
 
     std::vector<ViewSample> per_pixel(pixels);
     std::vector<uint8_t> has_sample(pixels, 0);
@@ -107,11 +119,18 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, cons
             for (int x = 0; x < width; ++x) {
                 const size_t pixel = static_cast<size_t>(y) * width + x;
                 Rng rng(settings.seed, RngDomain::camera, pixel);
-                const Ray ray = camera.generate_ray(x + 0.5f, y + 0.5f);
+                float jx = 0.5f, jy = 0.5f;
+                if (settings.jitter) {
+                    Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
+                    jx = jitter.uniform();
+                    jy = jitter.uniform();
+                }
+                const Ray ray = camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy);
                 ViewSample& sample = per_pixel[pixel];
                 sample.pixel = static_cast<uint32_t>(pixel);
                 if (trace_camera_path(scene, camera, ray, rng, settings.max_specular_depth, sample,
-                                      out.emission[pixel], out.alpha[pixel])) {
+                                      out.emission[pixel], out.alpha[pixel], out.first_normal[pixel],
+                                      out.first_depth[pixel])) {
                     sample.position -= out.origin;
                     has_sample[pixel] = 1;
                 }

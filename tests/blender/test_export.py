@@ -20,13 +20,27 @@ class RecordingCore:
     class Scene:
         def __init__(self):
             self.materials, self.meshes, self.lights, self.background = [], [], [], None
+            self.mesh_data, self.textures = [], []
 
         def add_material(self, **kw):
             self.materials.append(kw)
             return len(self.materials) - 1
 
-        def add_mesh(self, **kw):
-            self.meshes.append(kw)
+        def add_mesh_data(self, **kw):
+            self.mesh_data.append(kw)
+            return len(self.mesh_data) - 1
+
+        def add_instance(self, mesh_id, transform, **kw):
+            # `meshes` lists what is placed in the world: each instance with its mesh's arrays.
+            self.meshes.append(dict(self.mesh_data[mesh_id], mesh_id=mesh_id, transform=transform, **kw))
+            return len(self.meshes) - 1
+
+        def add_texture(self, **kw):
+            self.textures.append(kw)
+            return len(self.textures) - 1
+
+        def add_spot_light(self, **kw):
+            self.lights.append(("spot", kw))
 
         def add_point_light(self, **kw):
             self.lights.append(("point", kw))
@@ -290,13 +304,17 @@ def test_point_light_units_follow_cycles(empty_scene):
     assert approx(kw["position"], (1.0, 2.0, 3.0)) and kw["radius"] == pytest.approx(0.25)
 
 
-def test_spot_light_is_a_point_light_with_a_warning(empty_scene):
+def test_spot_light_keeps_its_cone(empty_scene):
     add_camera(empty_scene)
-    light_object(empty_scene, 'SPOT', 50.0)
+    light_object(empty_scene, 'SPOT', 50.0, rotation=(math.radians(90.0), 0.0, 0.0), scale=(3.0, 3.0, 3.0),
+                 spot_size=math.radians(60.0), spot_blend=0.25, shadow_soft_size=0.1)
     frame = export_current()
     ((kind, kw),) = frame.scene.lights
-    assert kind == "point" and approx(kw["intensity"], tuple(c * 50.0 / (4 * math.pi) for c in (1, .5, .25)))
-    assert any("spot" in w.lower() for w in frame.warnings)
+    assert kind == "spot" and approx(kw["intensity"], tuple(c * 50.0 / (4 * math.pi) for c in (1, .5, .25)))
+    assert approx(kw["direction"], (0.0, 1.0, 0.0))      # local -Z turned 90 degrees about X, scale ignored
+    assert kw["spot_size"] == pytest.approx(math.radians(60.0)) and kw["spot_blend"] == pytest.approx(0.25)
+    assert kw["radius"] == pytest.approx(0.1)
+    assert not frame.warnings
 
 
 def test_sun_light(empty_scene):
@@ -326,15 +344,18 @@ def test_rectangular_area_light(empty_scene, rotation):
     assert approx(kw["center"], tuple(obj.matrix_world.translation))
 
 
-def test_disk_area_light_keeps_its_area_and_warns(empty_scene):
+@pytest.mark.parametrize("shape", ['DISK', 'ELLIPSE'])
+def test_round_area_lights_are_ellipses(empty_scene, shape):
     add_camera(empty_scene)
-    light_object(empty_scene, 'AREA', 100.0, shape='DISK', size=1.0)
+    light_object(empty_scene, 'AREA', 100.0, shape=shape, size=1.0, size_y=2.0)
     frame = export_current()
     ((kind, kw),) = frame.scene.lights
-    area = math.pi / 4.0
-    assert np.linalg.norm(np.cross(kw["axis_u"], kw["axis_v"])) == pytest.approx(area, rel=1e-5)
+    size_y = 2.0 if shape == 'ELLIPSE' else 1.0
+    area = math.pi / 4.0 * size_y
+    assert kw["shape"] == "ellipse"
+    assert np.linalg.norm(kw["axis_u"]) * np.linalg.norm(kw["axis_v"]) == pytest.approx(size_y, rel=1e-5)
     assert kw["radiance"][0] == pytest.approx(100.0 / (4.0 * area), rel=1e-5)
-    assert any("rectangle" in w for w in frame.warnings)
+    assert not frame.warnings
 
 
 # --- camera, world, settings ---------------------------------------------------------------------------------

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -334,6 +335,61 @@ TEST(Directional, SameBitsForAnyThreadCount) {
         const std::vector<glm::vec3> one = run(1);
         EXPECT_EQ(one, run(2)) << "level " << level;
         EXPECT_EQ(one, run(8)) << "level " << level;
+    }
+}
+
+// Flat cut nodes are described from the leaves' summaries (ClusterBuildOptions::leaf_summaries) instead of their
+// samples. The facet is the same (centroid, axis, sample count) and its bounds only wider, so the image barely
+// moves; nodes across corners still take the per-sample description.
+TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
+    std::mt19937 rng(41);
+    ClusterBuildOptions with_summaries;
+    with_summaries.leaf_summaries = true;
+    struct Case {
+        const char* name;
+        ViewSamples vs;
+        PhotonMap map;
+    };
+    std::vector<Case> cases;
+    {
+        ViewSamples plane = plane_view(96, 64, 3.0f);
+        PhotonMap map = uniform_plane_photons(plane, 20000, 3.0f, 0.5f, rng);
+        cases.push_back({"plane", std::move(plane), std::move(map)});
+        ViewSamples planes = random_planes_view(rng, 96, 80);
+        PhotonMap near = photons_near_samples(planes, 6000, 0.6f, rng);
+        cases.push_back({"random planes", std::move(planes), std::move(near)});
+        // A crease down the middle, inside a column of tiles (x = 50 of 100): nodes across it are not flat.
+        ViewSamples crease = plane_view(100, 64, 3.0f);
+        for (ViewSample& sample : crease.samples)
+            if (sample.pixel % 100 >= 50) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.6f, 0.0f, 0.8f);
+        PhotonMap lit = uniform_plane_photons(crease, 20000, 3.0f, 0.5f, rng);
+        cases.push_back({"crease", std::move(crease), std::move(lit)});
+    }
+    for (const Case& c : cases) {
+        const ClusterHierarchy plain = build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height));
+        const ClusterHierarchy summarised =
+            build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height), with_summaries);
+        ASSERT_EQ(summarised.leaf_summaries.size(), summarised.leaves.size());
+        for (int level : {0, 1, 2}) {
+            SplatParams params = splat_params(0.3f, c.map, level);
+            params.plane_distance_factor = 0.2f;
+            Stats plain_stats, summarised_stats;
+            const std::vector<glm::vec3> a = directional(c.vs, plain, c.map, params, plain_stats);
+            const std::vector<glm::vec3> b = directional(c.vs, summarised, c.map, params, summarised_stats);
+            const double flat = summarised_stats.counters.at("directional_flat_cut_nodes");
+            const double cut = summarised_stats.counters.at("directional_cut_nodes");
+            EXPECT_EQ(plain_stats.counters.at("directional_flat_cut_nodes"), 0.0);
+            EXPECT_GT(flat, 0.0) << c.name << " level " << level;
+            if (std::string(c.name) == "crease") EXPECT_LT(flat, cut) << "level " << level;
+            EXPECT_EQ(plain_stats.counters.at("directional_cut_nodes"), cut);
+            const double sum_ratio = luminance_sum(b) / luminance_sum(a);
+            const double difference = mean_relative_difference(b, a);
+            std::printf("%s, level %d: %.0f of %.0f cut nodes from summaries; Σ ratio %.5f, mean |Δ|/x %.5f\n",
+                        c.name, level, flat, cut, sum_ratio, difference);
+            EXPECT_NEAR(sum_ratio, 1.0, 0.01) << c.name << " level " << level;
+            EXPECT_LT(difference, 0.02) << c.name << " level " << level;
+            for (const glm::vec3& v : b) ASSERT_TRUE(std::isfinite(v.x) && v.x >= 0.0f);
+        }
     }
 }
 

@@ -3,12 +3,13 @@
 The core takes physical quantities; Blender's light settings follow Cycles' conventions, measured on Cycles 3.4
 (docs/design.md section 7). With colour c and Power/Strength P:
   point  isotropic intensity I = c P / (4 pi)  [W/sr]; radius = Radius (soft shadows)
-  spot   the same intensity on the axis; the cone is NOT modelled yet (exported as a point light, with a note)
+  spot   the same intensity on the axis, with Cycles 3.4's falloff I(θ) = I cos θ smoothstep(...) inside the cone
+         of full angle Spot Size, softened by Blend (the core's spot light); radius as for point lights
   sun    irradiance E = c P  [W/m^2] on a surface facing the sun; travels along the object's local -Z;
          angle = the sun's full angular diameter
   area   one-sided rectangle emitting radiance L = c P / (4 A)  [W/(sr m^2)] along local -Z, where A is the
          area including the object's scale (so the flux is pi/4 P, as in Cycles 3.4, not P).
-         Disk and ellipse lights become a rectangle of the same area (and a note).
+         Disk and ellipse lights are native ellipses: A = π/4 size_x size_y (scale included), as in Cycles.
 """
 
 import math
@@ -25,9 +26,15 @@ def export_light(core_scene, name, light, matrix, notes):
     power = float(light.energy)
     rgb = tuple(c * power for c in color)
 
-    if light.type in ('POINT', 'SPOT'):
-        if light.type == 'SPOT':
-            notes.append(f"Light '{name}': spot cone ignored, rendered as a point light")
+    if light.type == 'SPOT':
+        # Cycles 3.4 ignores the object's scale for the cone (it reads only the direction).
+        direction = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
+        core_scene.add_spot_light(name=name, position=tuple(matrix.translation), direction=tuple(direction),
+                                  intensity=tuple(c / (4.0 * math.pi) for c in rgb),
+                                  spot_size=float(light.spot_size), spot_blend=float(light.spot_blend),
+                                  radius=float(light.shadow_soft_size))
+        return True
+    if light.type == 'POINT':
         core_scene.add_point_light(name=name, position=tuple(matrix.translation),
                                    intensity=tuple(c / (4.0 * math.pi) for c in rgb),
                                    radius=float(light.shadow_soft_size))
@@ -49,13 +56,9 @@ def _export_area_light(core_scene, name, light, matrix, rgb, notes):
     basis = matrix.to_3x3()
     axis_u = basis.col[0] * size_x
     axis_v = basis.col[1] * size_y
-    area = axis_u.length * axis_v.length
-    if light.shape in ('DISK', 'ELLIPSE'):
-        # The core only has rectangles: use one of the same area (pi/4 of the bounding box), same radiance.
-        area *= math.pi / 4.0
-        shrink = math.sqrt(math.pi / 4.0)
-        axis_u, axis_v = axis_u * shrink, axis_v * shrink
-        notes.append(f"Light '{name}': {light.shape.lower()} area light approximated by a rectangle of equal area")
+    round_shape = light.shape in ('DISK', 'ELLIPSE')
+    # Cycles' area uses the edge lengths (not the parallelogram a sheared matrix would give); so do we.
+    area = axis_u.length * axis_v.length * (math.pi / 4.0 if round_shape else 1.0)
     if area <= 0.0:
         notes.append(f"Light '{name}': area light of zero size skipped")
         return False
@@ -68,7 +71,8 @@ def _export_area_light(core_scene, name, light, matrix, rgb, notes):
     if axis_u.cross(axis_v).dot(facing) < 0.0:
         axis_u, axis_v = axis_v, axis_u
     core_scene.add_area_light(name=name, center=tuple(matrix.translation), axis_u=tuple(axis_u),
-                              axis_v=tuple(axis_v), radiance=tuple(c / (4.0 * area) for c in rgb))
+                              axis_v=tuple(axis_v), radiance=tuple(c / (4.0 * area) for c in rgb),
+                              shape="ellipse" if round_shape else "rectangle")
     return True
 
 

@@ -22,12 +22,19 @@ Known approximations that are NOT warned about, because they apply to nearly eve
     Multiscatter GGX without its multiple-scattering energy (slightly darker at high roughness; noted).
 
 Rough glass (and Refraction BSDF) stays perfectly smooth: the core has no rough dielectric; a note says so.
+
+Colours (Principled Base Color, the Color of Diffuse, Glossy and Glass) may come from an Image Texture node
+plugged in directly: the core then looks the image up at the hit's UV (export/textures.py). Any other node
+driving an input (a Mix RGB, a Math node, a texture behind a Mapping node's output...) is not interpreted:
+the socket's unconnected value is used and a note says so.
 """
 
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from . import textures
 
 # Above this roughness a glossy or glass surface visibly blurs in Cycles: a metal becomes "glossy" (the core's
 # own threshold for a mirror is the same number); glass is still rendered sharp, with a warning.
@@ -56,11 +63,17 @@ class MaterialSpec:
     # True when the shader reflects no light at all (an Emission shader, an unconnected shader socket):
     # mixing it with a real surface then only scales that surface.
     no_surface: bool = False
+    # An Image Texture node driving the colour (textures.TextureRef), looked up at the hit's UV by the core.
+    texture: object = None
+    holdout: bool = False          # Holdout shader or holdout object: cut out of the image
 
     def core_arguments(self):
-        """Keyword arguments for core Scene.add_material()."""
-        return dict(name=self.name, kind=self.kind, color=tuple(self.color), ior=float(self.ior),
-                    emission=tuple(self.emission), roughness=float(self.roughness))
+        """Keyword arguments for core Scene.add_material() (the texture index is added by the caller)."""
+        arguments = dict(name=self.name, kind=self.kind, color=tuple(self.color), ior=float(self.ior),
+                         emission=tuple(self.emission), roughness=float(self.roughness))
+        if self.holdout:
+            arguments["holdout"] = True
+        return arguments
 
     def describe(self):
         """Short human description, e.g. for the material panel: 'glass, IOR 1.50'."""
@@ -71,11 +84,20 @@ class MaterialSpec:
             text += f", roughness {self.roughness:.2f}"
         if any(c > 0.0 for c in self.emission):
             text += ", emitting"
+        if self.texture is not None:
+            text += f", image '{self.texture.image.name}'"
+        if self.holdout:
+            text = "holdout"
         return text
 
 
 def default_material():
     return MaterialSpec(name=DEFAULT_MATERIAL_NAME)
+
+
+def holdout_material():
+    """What objects marked as holdout render with, whatever their own materials."""
+    return MaterialSpec(name="Photon Splat holdout", color=BLACK, holdout=True)
 
 
 def convert_material(material):
@@ -135,7 +157,7 @@ def _convert_shader(node, name):
 
 def _principled(node, name):
     notes = []
-    base = color_input(node, "Base Color", notes)
+    base, texture = color_or_texture(node, "Base Color", notes)
     metallic = _clamp01(float_input(node, "Metallic", notes))
     transmission = _clamp01(float_input(node, "Transmission", notes))
     roughness = float_input(node, "Roughness", notes)
@@ -175,13 +197,17 @@ def _principled(node, name):
     if node.inputs["Normal"].is_linked:
         notes.append("normal/bump map ignored")
     spec.emission = emission
+    spec.texture = texture if spec.color == base else None
+    if texture is not None and spec.texture is None:
+        notes.append(f"image '{texture.image.name}' ignored (its colour is blended with Subsurface Color)")
     spec.notes = notes
     return spec
 
 
 def _diffuse(node, name):
     notes = []
-    spec = MaterialSpec(name=name, kind="diffuse", color=color_input(node, "Color", notes))
+    color, texture = color_or_texture(node, "Color", notes)
+    spec = MaterialSpec(name=name, kind="diffuse", color=color, texture=texture)
     if float_input(node, "Roughness", notes) > 0.0:
         notes.append("Oren-Nayar roughness ignored (rendered Lambertian)")
     spec.notes = notes
@@ -203,13 +229,14 @@ def _metal(name, color, roughness):
 def _glossy(node, name):
     notes = []
     distribution = getattr(node, "distribution", "GGX")
-    color = color_input(node, "Color", notes)
+    color, texture = color_or_texture(node, "Color", notes)
     roughness = float_input(node, "Roughness", notes)
     if distribution == "SHARP":
         # Cycles renders the Sharp distribution as a perfect mirror whatever the roughness.
         spec = MaterialSpec(name=name, kind="mirror", color=color)
     else:
         spec = _metal(name, color, roughness)
+    spec.texture = texture
     if spec.kind == "glossy":
         _note_distribution(notes, distribution)
     if node.bl_idname == "ShaderNodeBsdfAnisotropic":
@@ -220,8 +247,8 @@ def _glossy(node, name):
 
 def _glass(node, name):
     notes = []
-    spec = MaterialSpec(name=name, kind="glass", color=color_input(node, "Color", notes),
-                        ior=float_input(node, "IOR", notes))
+    color, texture = color_or_texture(node, "Color", notes)
+    spec = MaterialSpec(name=name, kind="glass", color=color, ior=float_input(node, "IOR", notes), texture=texture)
     _note_rough(notes, float_input(node, "Roughness", notes))
     if node.bl_idname == "ShaderNodeBsdfRefraction":
         notes.append("Refraction BSDF rendered as glass (with Fresnel reflection)")
@@ -243,7 +270,7 @@ def _emission(node, name):
 
 
 def _holdout(node, name):
-    return MaterialSpec(name=name, color=BLACK, notes=["Holdout rendered as black"])
+    return MaterialSpec(name=name, color=BLACK, holdout=True)
 
 
 def _mix_shader(node, name):
@@ -280,13 +307,18 @@ def _combine(first, w1, second, w2, what, notes):
     elif first.no_surface or second.no_surface:
         kept, weight = (second, w2) if first.no_surface else (first, w1)
         spec.kind, spec.color, spec.ior = kept.kind, _scaled(kept.color, weight), kept.ior
-        spec.roughness = kept.roughness
-    elif first.kind == "diffuse" and second.kind == "diffuse":
+        spec.roughness, spec.texture, spec.holdout = kept.roughness, kept.texture, kept.holdout
+        if kept.texture is not None and weight != 1.0:
+            notes.append(f"{what}: image '{kept.texture.image.name}' not scaled by the factor {weight:.2f}")
+    elif (first.kind == "diffuse" and second.kind == "diffuse" and first.texture is None
+          and second.texture is None and not first.holdout and not second.holdout):
         spec.color = tuple(w1 * a + w2 * b for a, b in zip(first.color, second.color))
     else:
         kept, weight = (first, w1) if w1 >= w2 else (second, w2)
         spec.kind, spec.color, spec.ior, spec.roughness = kept.kind, kept.color, kept.ior, kept.roughness
-        notes.append(f"{what} of {first.kind} and {second.kind} rendered as {kept.kind} alone")
+        spec.texture, spec.holdout = kept.texture, kept.holdout
+        label = lambda s: "holdout" if s.holdout else s.kind + (" (image)" if s.texture is not None else "")
+        notes.append(f"{what} of {label(first)} and {label(second)} rendered as {label(kept)} alone")
     return spec
 
 
@@ -346,6 +378,17 @@ def _input_value(node, socket_name, notes):
 
 def color_input(node, socket_name, notes):
     return _color(_input_value(node, socket_name, notes))
+
+
+def color_or_texture(node, socket_name, notes):
+    """(colour, TextureRef or None) of a colour input: an Image Texture node plugged in (directly or through
+    reroutes) becomes a texture the core looks up at the hit's UV; anything else is read as color_input does."""
+    socket = node.inputs[socket_name]
+    source = source_node(socket) if socket.is_linked else None
+    if source is not None and source.bl_idname == "ShaderNodeTexImage":
+        reference, color = textures.texture_reference(source, notes)
+        return color, reference
+    return color_input(node, socket_name, notes), None
 
 
 def float_input(node, socket_name, notes):

@@ -22,11 +22,14 @@ public:
     bool orthographic() const { return orthographic_; }
     glm::vec3 position() const { return glm::vec3(to_world_[3]); }
     float near_clip() const { return near_; }
+    float far_clip() const { return far_; }   // view depth of the far clip plane (infinity if the projection has none)
     // Perspective: tan of half the vertical field of view; orthographic: half the view height in world units.
     float vertical_half_extent() const { return half_extent_y_; }
 
     // Ray through the point (px, py) of the image plane, in pixel units (pixel centres at +0.5).
     Ray generate_ray(float px, float py) const;
+    // Distance along `ray` (a ray of generate_ray) to the far clip plane: Cycles clips camera rays at clip_end.
+    float far_distance(const Ray& ray) const;
     // Positive distance of a world point in front of the camera along its viewing axis.
     float view_depth(const glm::vec3& world_point) const;
 
@@ -38,6 +41,7 @@ private:
     int height_;
     bool orthographic_;
     float near_;
+    float far_;
     float half_extent_y_;
 };
 

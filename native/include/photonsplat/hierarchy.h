@@ -46,8 +46,21 @@ enum ClusterNodeFlags : uint8_t {
     kNodeRegular = 2u,      // every sample has a finite position and a finite unit (±1e-4) geometric normal
 };
 
+// What the directional method needs of a leaf's samples, gathered while the leaf's box is built (the samples are
+// in cache then): with it, a cut node made of flat leaves is described without reading its samples again.
+// Only samples with a finite position and a finite normal count ("regular" samples).
+struct LeafSummary {
+    glm::vec3 centroid{0.0f};    // mean position of its regular samples, relative to ViewSamples::origin
+    float radius = 0.0f;         // largest distance from the centroid to one of them
+    glm::vec3 normal_sum{0.0f};  // Σ of their normals, each normalised
+    float cone_angle = 3.14159265f;  // rad: every normal within this of normalize(normal_sum); π = no bound
+    float slab = 0.0f;           // largest |normalize(normal_sum)·(x − centroid)|: the leaf's thickness
+    uint32_t count = 0;          // regular samples
+};
+
 struct ClusterBuildOptions {
-    bool normal_cones = false;  // also build ClusterHierarchy::cones and node_flags (the cluster_cone method)
+    bool normal_cones = false;    // also build ClusterHierarchy::cones and node_flags (the cluster_cone method)
+    bool leaf_summaries = false;  // also build ClusterHierarchy::leaf_summaries (the directional method)
 };
 
 // Parameters of the cluster key, taken from the camera.
@@ -70,6 +83,8 @@ struct ClusterHierarchy {
     // Only when built with ClusterBuildOptions::normal_cones (else empty), index-aligned with `nodes`:
     std::vector<NormalCone> cones;        // the node's samples' geometric normals lie in its cone
     std::vector<uint8_t> node_flags;      // ClusterNodeFlags true of every sample of the node
+    // Only with ClusterBuildOptions::leaf_summaries (else empty), index-aligned with `leaves`:
+    std::vector<LeafSummary> leaf_summaries;
 
     bool empty() const { return nodes.empty(); }
     bool has_cones() const {
@@ -77,6 +92,7 @@ struct ClusterHierarchy {
     }
     size_t bytes() const;       // nodes, sample order, leaves: not the cones
     size_t cone_bytes() const;  // cones and node flags
+    size_t summary_bytes() const { return leaf_summaries.capacity() * sizeof(LeafSummary); }
 };
 
 // Depth slice of the cluster key (Olsson et al. 2012): k = floor(ln(z/near) / ln(1 + 2 tan(fovY/2) / tilesY)),

@@ -1,5 +1,5 @@
 // Everything that emits light, as direct light and photon tracing see it: the scene's lights, the emissive
-// surfaces (all triangles whose material has emission, as one source: Cycles' "mesh lights") and a uniform
+// surfaces (all triangles of all instances whose material has emission, as one source: Cycles' "mesh lights") and a uniform
 // world background. Built per render from the scene, so a scene without emission pays nothing for it.
 #pragma once
 #include <cstdint>
@@ -23,8 +23,20 @@ public:
     glm::vec3 flux(size_t i) const { return sources_[i].flux; }  // [W] sent into the scene
     bool is_delta(size_t i) const;                                // one shadow ray is exact
     bool is_world(size_t i) const { return sources_[i].kind == Kind::world; }  // the uniform background
+    const Light* light(size_t i) const { return sources_[i].light; }          // nullptr unless a scene light
+
+    // Solid-angle density with which sample_incidence of the emissive surfaces draws the point y of
+    // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
+    float emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
+
+    // A sun: its photons start on a disc covering the scene, placed by sample_emission's u1, u2 (an
+    // area-preserving map), which an EmissionGuide may redistribute.
+    bool emits_from_disc(size_t i) const {
+        return sources_[i].kind == Kind::light && sources_[i].light->kind == LightKind::sun;
+    }
 
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
+    // The returned pdf is set for scene lights and emissive surfaces; the world's cosine sampling leaves it 0.
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
                                     float u3) const;
     // A photon's starting ray and power. u1..u5 in [0, 1).
@@ -42,12 +54,17 @@ private:
     glm::vec3 center_;
     float radius_;  // of the scene's bounding sphere
     std::vector<Source> sources_;
-    // Emissive triangles, chosen in proportion to area × luminance of their emission.
-    std::vector<uint32_t> emitters_;
+    // Emissive triangles of every instance (an instanced emissive mesh lights the scene once per copy), chosen
+    // in proportion to world-space area × luminance of their emission.
+    struct Emitter {
+        uint32_t instance, triangle;
+    };
+    std::vector<Emitter> emitters_;
     std::vector<float> emitter_cdf_;
     std::vector<float> emitter_probability_;
 
     size_t pick_emitter(float u) const;
+    glm::vec3 emission_of(const Emitter& e) const;
 };
 
 }  // namespace ps

@@ -10,7 +10,9 @@ namespace ps {
 enum class LightKind {
     point,  // isotropic intensity I [W/sr]; a sphere of `radius` for soft shadows (0 = a true point)
     sun,    // distant light, irradiance E [W/m²] on a surface facing it; `angle` = full angular diameter
-    area,   // one-sided rectangle emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
+    area,   // one-sided rectangle (or ellipse) emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
+    spot,   // a point light (intensity I on the axis, `radius`) restricted to a cone around `direction`, with
+            // Cycles 3.4's falloff: I(θ) = I · cos θ · smoothstep((cos θ − cos(size/2)) / ((1 − cos(size/2))·blend))
 };
 
 struct Light {
@@ -18,14 +20,19 @@ struct Light {
     LightKind kind = LightKind::point;
     glm::vec3 value{0.0f};       // point: intensity; sun: irradiance; area: radiance (RGB)
     glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle
-    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels (unit)
-    float radius = 0.0f;         // point only, >= 0
+    glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels; spot: the cone's axis (unit)
+    float radius = 0.0f;         // point and spot, >= 0
     float angle = 0.0f;          // sun only, full angular diameter in radians, in [0, π)
     glm::vec3 axis_u{1.0f, 0.0f, 0.0f};  // area: full edge vectors (object scale included)
     glm::vec3 axis_v{0.0f, 1.0f, 0.0f};
+    bool ellipse = false;        // area: the ellipse (disk) inscribed in the rectangle instead of the rectangle
+    float spot_size = 0.0f;      // spot: full cone angle in radians, in (0, π]
+    float spot_blend = 0.0f;     // spot: softness of the cone's edge, in [0, 1]
 
     glm::vec3 area_normal() const;  // unit normal of the emitting side of an area light
-    float area() const;             // area light surface area
+    float area() const;             // area light surface area (π/4 of the rectangle's for an ellipse)
+    // Spot only: the falloff factor cos θ · smoothstep(...) for a unit direction leaving the light (0 outside).
+    float spot_attenuation(const glm::vec3& outgoing) const;
 };
 
 const char* to_string(LightKind kind);
@@ -36,9 +43,22 @@ struct LightIncidence {
     glm::vec3 wi;      // unit, from the receiving point towards the light
     float distance;    // to the sampled light point (infinity for a sun)
     glm::vec3 value;   // incident radiance × geometry / pdf (irradiance per unit cos θ)
+    float pdf = 0.0f;  // solid-angle density of having drawn wi (for MIS); 0 for a delta light
 };
 LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, float u1, float u2);
 bool light_is_delta(const Light& light);  // a point of radius 0 or a 0° sun: one shadow ray is exact
+
+// Where a ray from x along `direction` (unit) meets the light's emitting shape AS sample_light_incidence(x)
+// samples it (a point light's disc facing x, a sun's cone, an area light's front face), for a path tracer whose
+// BSDF-sampled rays may hit lights (multiple importance sampling). pdf is the density sample_light_incidence
+// has of drawing that direction from x. A delta light is never hit.
+struct LightHit {
+    bool hit = false;
+    float distance = 0.0f;       // along the ray; infinity for a sun
+    glm::vec3 radiance{0.0f};    // emitted towards x
+    float pdf = 0.0f;            // solid angle
+};
+LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3& direction);
 
 // Total flux [W] the light sends into the scene; a sun's is what crosses the scene's bounding sphere.
 glm::vec3 light_flux(const Light& light, float scene_radius);

@@ -1,6 +1,7 @@
 // The few BSDFs the core supports. The add-on maps Blender's shader nodes onto these; anything else is
 // approximated there (and said so), never interpreted here.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include <glm/vec3.hpp>
@@ -26,6 +27,9 @@ struct Material {
     float ior = 1.45f;         // glass only; > 0
     glm::vec3 emission{0.0f};  // emitted radiance W/(sr·m²), from both faces (Cycles' Emission convention)
     float roughness = 0.5f;    // glossy only: Blender roughness in [0, 1]; the GGX α is its square
+    int32_t texture = -1;      // index into Scene::textures() whose lookup at the hit's UV replaces `color`; -1: none
+    bool holdout = false;      // Cycles' Holdout: cut out of the image (alpha 0, black) where the camera sees it,
+                               // an absorbing black surface for every other ray
 
     // A glossy surface rough enough to be a lobe: a non-specular hit (view sample, stored photon).
     bool is_glossy() const { return kind == MaterialKind::glossy && roughness > kGlossyMirrorRoughness; }

@@ -52,6 +52,11 @@ private:
 // allocates anything, so a frame that cannot fit is refused at once.
 void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
+// Refuses (InvalidInput, as reserve does) a frame that would not fit, before anything is allocated; for a caller
+// that holds `extra_bytes_per_pixel` beside each pass's buffers (the progressive render's running sums).
+void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                        double extra_bytes_per_pixel);
+
 // --- predictions, in bytes (each the structure as Stats::bytes names it) -----------------------------------
 
 // View samples (pixels × (sample + emission + alpha), samples <= pixels) and the per-pixel scratch of their stage.
@@ -59,9 +64,9 @@ double predict_view_sample_bytes(int width, int height);
 double predict_view_sample_scratch_bytes(int width, int height);
 // Direct light and splatted indirect light per view sample, and the frame's RGBA + three component buffers.
 double predict_per_sample_light_bytes(size_t samples);
-double predict_image_bytes(int width, int height);
+double predict_image_bytes(int width, int height, bool caustics_pass);
 // Embree's geometry buffers (the BVH itself lives in Embree and is not counted).
-double predict_embree_bytes(size_t triangles);
+double predict_embree_bytes(const Scene& scene);
 // The photon map: `emitted` paths × the expected number of stored photons per path, which Russian roulette bounds
 // by the geometric series of the largest continuation probability of the scene's materials, × the
 // growth slack of the per-chunk vectors (which hold the photons while they are traced).
@@ -69,6 +74,7 @@ double predict_photon_map_bytes(const Scene& scene, uint64_t emitted, int max_bo
 // The hierarchy over `samples` view samples (at most one leaf per sample, at most 2 nodes per leaf); with cones
 // the normal cones and node flags too.
 double predict_hierarchy_bytes(size_t samples);
+double predict_leaf_summary_bytes(size_t samples);  // directional: one summary per leaf
 double predict_cone_bytes(size_t samples);
 
 // The structures of one splat method, known once the view samples, photons and (for the hierarchy methods) the

@@ -34,6 +34,7 @@ struct PhotonSettings {
     uint64_t count = 0;       // photon paths to emit
     int max_bounces = 8;      // path length bound (a photon is stored at most this many times)
     uint64_t seed = 0;
+    bool guide = true;        // learn where sun photons get stored, and emit them there (emission_guide.h)
 };
 
 PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, const RenderControl& control,

@@ -1,4 +1,6 @@
-// Embree behind a small interface: closest hit and occlusion of single rays, over the scene's triangles.
+// Embree behind a small interface: closest hit and occlusion of single rays. Two levels: one BVH per mesh (in
+// object space) and a top-level BVH over the instances, so a mesh placed a thousand times is built and stored
+// once, and moving an instance refits only the top level.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -9,25 +11,31 @@
 
 namespace ps {
 
-struct Triangle;
+struct MeshData;
+struct Instance;
 
 struct Hit {
     float t = 0.0f;
-    uint32_t triangle = 0;   // index into Scene::triangles()
-    float u = 0.0f, v = 0.0f;  // barycentrics of v1 and v2
+    uint32_t instance = 0;     // index into Scene::instances()
+    uint32_t triangle = 0;     // index into that instance's mesh triangles
+    float u = 0.0f, v = 0.0f;  // barycentrics of the triangle's 2nd and 3rd corners
 };
 
 class RayTracer {
 public:
-    explicit RayTracer(const std::vector<Triangle>& triangles);
+    RayTracer(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances);
     ~RayTracer();
     RayTracer(const RayTracer&) = delete;
     RayTracer& operator=(const RayTracer&) = delete;
 
-    // Closest hit with t in (t_min, t_max); false when the ray escapes.
-    bool intersect(const Ray& ray, float t_min, float t_max, Hit& hit) const;
-    // True when anything lies between t_min and t_max along the ray.
-    bool occluded(const Ray& ray, float t_min, float t_max) const;
+    // Closest hit with t in (t_min, t_max) among instances visible to `rays` (RayVisibility bits, scene.h);
+    // false when the ray escapes.
+    bool intersect(const Ray& ray, float t_min, float t_max, Hit& hit, uint32_t rays = 7u) const;
+    // True when anything visible to `rays` lies between t_min and t_max along the ray.
+    bool occluded(const Ray& ray, float t_min, float t_max, uint32_t rays = 7u) const;
+    // Applies new transforms of the listed instances (already stored in `instances`) and recommits the top
+    // level only. Not thread-safe against concurrent queries.
+    void update_instances(const std::vector<Instance>& instances, const std::vector<uint32_t>& moved);
     size_t bytes() const { return bytes_; }
 
 private:

@@ -26,10 +26,18 @@ public:
     // part [start, end] of the whole render it covers.
     void begin_stage(const std::string& stage, double start, double end) {
         std::lock_guard<std::mutex> lock(mutex_);
-        stage_ = stage;
-        start_ = start;
-        end_ = end;
+        stage_ = prefix_ + stage;
+        start_ = span_start_ + (span_end_ - span_start_) * start;
+        end_ = span_start_ + (span_end_ - span_start_) * end;
         within_.store(0.0, std::memory_order_relaxed);
+    }
+    // Called by a render made of parts (progressive passes): the stages that follow cover [start, end] of the
+    // whole instead of [0, 1], and their names get `prefix` ("pass 3/8: ").
+    void set_span(double start, double end, const std::string& prefix) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        span_start_ = start;
+        span_end_ = end;
+        prefix_ = prefix;
     }
     // Called from inside a stage (any thread) as work completes: `done` of `total` units.
     void advance(uint64_t done, uint64_t total) const {
@@ -47,6 +55,8 @@ private:
     mutable std::mutex mutex_;
     std::string stage_ = "starting";
     double start_ = 0.0, end_ = 0.0;
+    double span_start_ = 0.0, span_end_ = 1.0;
+    std::string prefix_;
     mutable std::atomic<double> within_{0.0};
 };
 

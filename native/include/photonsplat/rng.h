@@ -7,7 +7,16 @@
 namespace ps {
 
 // Which part of the renderer a stream belongs to, so pixel 7 and photon 7 never share numbers.
-enum class RngDomain : uint64_t { camera = 1, direct_light = 2, photon = 3, light_choice = 4 };
+enum class RngDomain : uint64_t {
+    camera = 1,
+    direct_light = 2,
+    photon = 3,
+    light_choice = 4,
+    emission_guide = 5,
+    pixel_jitter = 6,       // progressive passes after the first: where in its pixel a camera ray goes
+    reference_path = 16,    // reference renderer: one camera path, keyed by pass × pixels + pixel
+    reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
+};
 
 // PCG32 (O'Neill 2014), with state and stream derived from the key by SplitMix64.
 class Rng {

@@ -17,8 +17,12 @@ struct SurfacePoint {
     glm::vec3 shading_normal;    // unit, interpolated, on the same side as geometric_normal
     bool entering;               // the ray hit the front face (the triangle's winding normal faced the ray)
     const Material* material;
+    glm::vec3 color;             // the material's colour here: its texture at the hit's UV, else Material::color
 };
 
+// Resolves a hit (instance + triangle + barycentrics) to a world-space surface point: position, normals
+// (through the instance's normal matrix), UV and the material's textured colour. The one place where hits
+// become surfaces, for camera paths, shadow-ray origins and photon paths alike.
 SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
 
 // A ray origin just off the surface on the side of `normal`, robust at any scale (the integer-ulp offset of
@@ -34,7 +38,7 @@ glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, fl
 
 // One stochastic step through a mirror or glass interface (a glossy material at or below
 // kGlossyMirrorRoughness counts as a mirror here). `direction` is the travel direction of the ray.
-// The branch (reflect or refract) is chosen with probability equal to its Fresnel weight, so the returned
+// The tint is surface.color (the material's colour, textured). The branch (reflect or refract) is chosen with probability equal to its Fresnel weight, so the returned
 // weight is the tint only: photon powers and path throughputs stay near equal.
 struct SpecularStep {
     glm::vec3 direction;

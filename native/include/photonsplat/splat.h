@@ -148,6 +148,10 @@ glm::dvec4 tiled_sphere_screen_bounds(const Camera& camera, const glm::vec3& cen
 std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
                                          const PhotonMap& photons, const SplatParams& params,
                                          const RenderControl& control, Stats& stats);
+// The directional method's test for giving up its bins: the median leaf (by the samples it holds) is more than
+// 2r across. With directional_level -1 it then splats exactly (splat_cluster); progressive passes apply the same
+// test to an explicit level, so that the running mean converges to the exact methods' answer.
+bool directional_leaves_exceed_radius(const ClusterHierarchy& hierarchy, float radius);
 // Gathering from a hashed uniform grid of photons.
 std::vector<glm::vec3> splat_gather(const ViewSamples& samples, const PhotonMap& photons, const SplatParams& params,
                                     const RenderControl& control, Stats& stats);

@@ -39,6 +39,9 @@ struct ViewSamples {
     std::vector<ViewSample> samples;    // at most one per pixel, in pixel order
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
+    // Of the FIRST surface each camera ray hits (glass and mirrors included), as Cycles' Normal and Depth passes:
+    std::vector<glm::vec3> first_normal;  // width × height: world-space shading normal facing the camera; 0 if none
+    std::vector<float> first_depth;       // width × height: view depth along the camera axis; 0 if the ray escaped
 
     size_t bytes() const;
 };
@@ -46,6 +49,10 @@ struct ViewSamples {
 struct ViewSampleSettings {
     uint64_t seed = 0;
     int max_specular_depth = 8;   // bounces through mirror/glass before the path is dropped
+    // false: every ray through its pixel's centre (a one-shot render). true: through a point drawn uniformly in
+    // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
+    // mean is box-filtered over each pixel (anti-aliasing).
+    bool jitter = false;
 };
 
 ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,

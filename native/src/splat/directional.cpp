@@ -15,6 +15,10 @@
 //    one facet. A facet has its sample centroid, its normal cone, and its own bins: without the split, a corner
 //    node's centroid floats off both walls and its bins mix the photons of both, which the exact method keeps
 //    apart with its n_x·n_p test. A sample belongs to the facet whose axis is closest to its normal.
+//    A node whose leaves' summaries (built with the hierarchy, ClusterBuildOptions::leaf_summaries) bound its
+//    normals within kSplitAngle is one facet described from those summaries, with bounds that contain every
+//    sample; only the other nodes (corners, curves) read their samples again. That pass, through sample_order
+//    to samples scattered over the frame, cost as much as shading all of them.
 // 3. Traverse. Each photon walks down to the cut only, rejecting nodes above it by sphere-vs-box as `cluster`
 //    does. At a cut node it is deposited into each facet whose centroid is within r, with weight
 //    w = kernel_weight(centroid − p), unless the facet's normal cone shows that none of its samples could accept
@@ -55,7 +59,8 @@
 // deposits into a facet's bin), "photon_sample_tests" = 0 (no photon is ever tested against a sample),
 // "bin_evaluations" (bins shaded, own and parent's, summed over samples), "contributing_pairs" = Σ over deposits
 // of the facet's sample count (the photon–sample pairs the deposits hand flux to, whether or not a sample's
-// facing test then takes that bin), "directional_cut_nodes", "directional_facets". Values: "directional_level"
+// facing test then takes that bin), "directional_cut_nodes", "directional_flat_cut_nodes" (described from leaf
+// summaries), "directional_facets". Values: "directional_level"
 // (the level used; -1 when the exact splat was used), "directional_exact_fallback" (1 then).
 // Bytes: "direction_bins" (8 bins × 6 int64 per facet), "directional_nodes" (facets, cut and tree bookkeeping).
 #include <algorithm>
@@ -197,6 +202,18 @@ std::pair<int, bool> choose_level(const ClusterHierarchy& hierarchy, const TreeS
     return {level, false};
 }
 
+}  // namespace
+
+bool directional_leaves_exceed_radius(const ClusterHierarchy& hierarchy, float radius) {
+    if (hierarchy.empty()) return false;
+    const TreeShape shape = tree_shape(hierarchy);
+    std::vector<double> limit(size_t(shape.height[hierarchy.root]) + 1, double(radius));
+    limit[0] = kFallbackLeafDiagonal * double(radius);
+    return !median_at_most(hierarchy, shape, limit)[0];
+}
+
+namespace {
+
 // ---- facets -------------------------------------------------------------------------------------------------
 
 // The samples of one orientation in a cut node: what the traversal tests and what shading needs.
@@ -241,6 +258,18 @@ struct Oriented {
     glm::vec3 position, normal;
 };
 
+// A facet's rejection tests from its normal cone (half-angle theta around its axis) and its thickness `slab`
+// (largest |axis·(x − centroid)| of its samples).
+void set_rejects(Facet& f, float theta, double slab, const SplatParams& params) {
+    const float tau = std::acos(std::clamp(params.cos_normal_tolerance, -1.0f, 1.0f));
+    f.cone = theta;
+    if (theta < 0.5f * kPi) f.facing_reject = -std::sin(theta);
+    if (theta + tau < kPi) f.normal_reject = std::cos(theta + tau);
+    if (params.plane_distance_factor > 0.0f && theta < kPi)
+        f.plane_reject = params.plane_distance_factor * params.radius + float(slab) +
+                         2.0f * std::sin(0.5f * theta) * params.radius;
+}
+
 // Fills in a facet from its samples (those of `points` for which `member` holds), around a given axis.
 template <typename Member>
 void describe_facet(Facet& f, const std::vector<Oriented>& points, const SplatParams& params, Member member) {
@@ -266,14 +295,7 @@ void describe_facet(Facet& f, const std::vector<Oriented>& points, const SplatPa
         reach = std::max(reach, glm::length(d));
     }
     f.reach = float(reach);
-    const float theta = std::acos(float(std::clamp(min_cos, -1.0, 1.0))) + kConeInflation;
-    const float tau = std::acos(std::clamp(params.cos_normal_tolerance, -1.0f, 1.0f));
-    f.cone = theta;
-    if (theta < 0.5f * kPi) f.facing_reject = -std::sin(theta);
-    if (theta + tau < kPi) f.normal_reject = std::cos(theta + tau);
-    if (params.plane_distance_factor > 0.0f && theta < kPi)
-        f.plane_reject = params.plane_distance_factor * params.radius + float(slab) +
-                         2.0f * std::sin(0.5f * theta) * params.radius;
+    set_rejects(f, std::acos(float(std::clamp(min_cos, -1.0, 1.0))) + kConeInflation, slab, params);
 }
 
 // A cut node's facets: one, or two when its normals spread wider than kSplitAngle. Returns how many.
@@ -329,6 +351,51 @@ uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<
         out[0].cone = kPi;
     }
     return 1;
+}
+
+// A cut node of flat leaves as one facet, from the leaves' summaries (hierarchy.leaf_summaries[first, last))
+// instead of its samples: the bounds hold every sample (cone, slab and reach are widened by each leaf's own), so
+// the rejection tests stay conservative. Returns false when the summaries cannot show the node to be one facet
+// (a leaf with unbounded normals, normals that cancel, or a spread near kSplitAngle: a corner or a curve); the
+// node is then described from its samples.
+bool describe_flat_node(const ClusterHierarchy& hierarchy, size_t first, size_t last, const SplatParams& params,
+                        Facet& out) {
+    glm::dvec3 position_sum(0.0), normal_sum(0.0);
+    double count = 0.0;
+    for (size_t l = first; l != last; ++l) {
+        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
+        if (leaf.count == 0) continue;
+        if (!(leaf.cone_angle < kPi)) return false;
+        position_sum += glm::dvec3(leaf.centroid) * double(leaf.count);
+        normal_sum += glm::dvec3(leaf.normal_sum);
+        count += leaf.count;
+    }
+    const double length = glm::length(normal_sum);
+    if (count == 0.0 || !(length > 1e-3 * count)) return false;
+    const glm::dvec3 axis = normal_sum / length, centroid = position_sum / count;
+    double spread = 0.0, slab = 0.0, reach = 0.0;
+    for (size_t l = first; l != last; ++l) {
+        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
+        if (leaf.count == 0) continue;
+        const glm::dvec3 leaf_axis = glm::normalize(glm::dvec3(leaf.normal_sum));
+        spread = std::max(spread, std::acos(std::clamp(glm::dot(axis, leaf_axis), -1.0, 1.0)) + leaf.cone_angle);
+        // |a·(x − c)| <= |a·(c_l − c)| + |a_l·(x − c_l)| + |a − a_l|·|x − c_l|
+        const glm::dvec3 offset = glm::dvec3(leaf.centroid) - centroid;
+        slab = std::max(slab, std::fabs(glm::dot(axis, offset)) + double(leaf.slab) +
+                                  glm::length(axis - leaf_axis) * double(leaf.radius));
+        reach = std::max(reach, glm::length(offset) + double(leaf.radius));
+    }
+    // The per-sample description splits a node whose normals spread wider than kSplitAngle; with bounds, split
+    // (from the samples) whenever the bound does not rule that out.
+    if (!(spread < kSplitAngle)) return false;
+    out = Facet();
+    out.axis = glm::vec3(axis);
+    out.centroid = glm::vec3(centroid);
+    out.samples = uint32_t(count);
+    out.reach = float(reach);
+    frame_around(out.axis, out.tangent, out.bitangent);
+    set_rejects(out, float(spread) + kConeInflation, slab, params);
+    return true;
 }
 
 int bin_of(const Facet& f, const glm::vec3& wi) {
@@ -438,16 +505,33 @@ private:
         });
         std::vector<Facet> pairs(2 * cuts_.size());
         cut_of_sample_.assign(views_.size(), kNone);
+        // The leaves under a node: leaves are in sample order, so those whose first sample lies in its range.
+        const bool summaries = hierarchy_.leaf_summaries.size() == hierarchy_.leaves.size();
+        std::vector<uint32_t> leaf_begin(summaries ? hierarchy_.leaves.size() : 0);
+        for (size_t l = 0; l < leaf_begin.size(); ++l) leaf_begin[l] = hierarchy_.nodes[hierarchy_.leaves[l]].sample_begin;
         tbb::enumerable_thread_specific<std::vector<Oriented>> scratch;
+        std::atomic<uint64_t> from_summaries{0};
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
             std::vector<Oriented>& points = scratch.local();
+            uint64_t described = 0;
             for (size_t c = r.begin(); c != r.end(); ++c) {
                 const ClusterNode& node = hierarchy_.nodes[cuts_[c].node];
-                cuts_[c].facet_count = describe_cut_node(hierarchy_, views_, node, params_, points, &pairs[2 * c]);
+                // Flat nodes (most of a frame) from their leaves' summaries: reading the samples again, scattered
+                // over the frame, cost as much as shading them.
+                const size_t first = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_begin) - leaf_begin.begin());
+                const size_t last = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_end) - leaf_begin.begin());
+                if (summaries && describe_flat_node(hierarchy_, first, last, params_, pairs[2 * c])) {
+                    cuts_[c].facet_count = 1;
+                    ++described;
+                } else {
+                    cuts_[c].facet_count = describe_cut_node(hierarchy_, views_, node, params_, points, &pairs[2 * c]);
+                }
                 for (uint32_t k = node.sample_begin; k != node.sample_end; ++k)
                     cut_of_sample_[hierarchy_.sample_order[k]] = uint32_t(c);
             }
+            from_summaries += described;
         });
+        stats_.counters["directional_flat_cut_nodes"] += double(from_summaries.load());
         facets_.reserve(cuts_.size() + cuts_.size() / 8);
         for (size_t c = 0; c < cuts_.size(); ++c) {
             Cut& cut = cuts_[c];
@@ -804,7 +888,7 @@ std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, cons
     validate(hierarchy, samples, photons);
     control.check();
     for (const char* name : {"photon_node_tests", "node_deposits", "photon_sample_tests", "contributing_pairs",
-                             "bin_evaluations", "directional_cut_nodes", "directional_facets"})
+                             "bin_evaluations", "directional_cut_nodes", "directional_flat_cut_nodes", "directional_facets"})
         stats.counters[name] += 0.0;  // present even when there is nothing to splat
     stats.bytes["direction_bins"] = 0.0;
     stats.values["directional_exact_fallback"] = 0.0;

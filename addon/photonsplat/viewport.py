@@ -1,0 +1,199 @@
+"""The 3D viewport in Rendered shading: what RenderEngine.view_update / view_draw do for Photon Splat.
+
+Both run on Blender's main thread, so neither may wait on the core:
+  - view_update (a depsgraph change) updates the scene cache (export/scene_cache.py: only what changed is read
+    from Blender), builds the core scene and restarts the refinement;
+  - view_draw compares the view (matrices, region size) with the one being rendered, restarts the refinement
+    when it changed (navigation produces no view_update), and draws the newest image it has.
+The rendering itself runs in refine.Refinement's thread; it asks Blender for a redraw after every image.
+Every session is listed here so that unregistering the add-on or loading a file stops all of them.
+"""
+
+import collections
+import time
+import weakref
+
+import bpy
+import gpu
+import numpy as np
+from gpu_extras.presets import draw_texture_2d
+
+from . import export, refine
+from .export.scene_cache import SceneCache
+
+_sessions = weakref.WeakSet()
+
+
+def stop_all(wait=1.0):
+    """Stops every viewport's rendering (add-on unregistered, file loaded); waits up to `wait` s in total."""
+    deadline = time.perf_counter() + wait
+    sessions = list(_sessions)
+    for session in sessions:
+        session.stop()
+    for session in sessions:
+        session.join(max(0.0, deadline - time.perf_counter()))
+
+
+def refine_settings(core, scene):
+    """scene.photonsplat -> RefineSettings of the viewport (read on the main thread; the worker gets a copy)."""
+    props = scene.photonsplat
+    render = dict(photons=props.viewport_photons, radius=props.radius, method=props.method,
+                  max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
+                  direct_samples=props.direct_samples, kernel=props.kernel,
+                  directional_level=props.directional_level, transparent=scene.render.film_transparent)
+    core.RenderSettings(**render)       # validate now: a bad value is reported, not raised in the thread
+    return refine.RefineSettings(render=render, preview_photons=props.viewport_preview_photons,
+                                 preview_divider=props.viewport_preview_divider,
+                                 photons_per_pass=props.viewport_photons, max_passes=props.viewport_passes,
+                                 time_limit=props.viewport_time_limit)
+
+
+def view_key(region, region_data):
+    """What the image depends on in the view: both matrices and the region's size."""
+    return (tuple(v for row in region_data.view_matrix for v in row),
+            tuple(v for row in region_data.window_matrix for v in row),
+            region.width, region.height)
+
+
+def view_camera_factory(core, view_matrix, window_matrix):
+    """make_camera(width, height) for the viewport's current view: the viewport's own projection, so the image
+    covers the region exactly whatever its resolution (first image at a fraction of it, then full)."""
+    to_world = np.array(view_matrix.inverted(), dtype=np.float64)
+    projection = np.array(window_matrix, dtype=np.float64)
+
+    def make_camera(width, height):
+        return core.Camera(to_world=to_world, projection=projection, width=width, height=height)
+    return make_camera
+
+
+class ViewportSession:
+    """State of one Rendered viewport: the scene cache, the core scene, the running refinement, the texture."""
+
+    def __init__(self, core):
+        self.core = core
+        self.cache = SceneCache()
+        self.scene = None             # core Scene built from the cache
+        self.settings = None
+        self.refinement = None
+        self.error = None
+        self.last_sync = None         # SyncReport of the last view_update
+        self._view = None
+        self._make_camera = None
+        self._texture = None
+        self._texture_version = None
+        self._engine = None
+        self.restarts = 0             # refinements started so far (numbers them)
+        # (time.perf_counter(), restart number, passes) each time view_draw shows a new image: how long a
+        # change takes to reach the screen (tools/viewport_timing.py reads it).
+        self.draw_log = collections.deque(maxlen=1024)
+        _sessions.add(self)
+
+    # --- view_update ------------------------------------------------------------------------------------
+    def update(self, engine, depsgraph):
+        self._engine = weakref.ref(engine)
+        try:
+            settings = refine_settings(self.core, depsgraph.scene)
+            self.last_sync = self.cache.sync(depsgraph)
+            changed = self.last_sync.changed or self.scene is None or settings != self.settings
+            self.settings = settings
+            if self.last_sync.changed or self.scene is None:
+                self.scene = self.cache.build(self.core)
+            self.error = None
+        except (ValueError, export.ExportError) as error:
+            self.error = str(error)
+            self.scene = None
+            changed = True
+        if changed:               # selection and other changes that do not show restart nothing
+            self.restart()
+
+    # --- view_draw --------------------------------------------------------------------------------------
+    def draw(self, engine, context, depsgraph):
+        region, region_data = context.region, context.region_data
+        key = view_key(region, region_data)
+        if key != self._view:
+            self._view = key
+            self._make_camera = view_camera_factory(self.core, region_data.view_matrix, region_data.window_matrix)
+            self.restart()
+        self._status(engine)
+        frame = self.refinement.latest() if self.refinement else None
+        if frame is not None and self._texture_version != (self.restarts, frame.version):
+            height, width = frame.pixels.shape[:2]
+            buffer = gpu.types.Buffer('FLOAT', width * height * 4, frame.pixels.reshape(-1))
+            self._texture = gpu.types.GPUTexture((width, height), format='RGBA16F', data=buffer)
+            self._texture_version = (self.restarts, frame.version)
+            self.draw_log.append((time.perf_counter(), self.restarts, frame.passes))
+        if self._texture is None:
+            return
+        # Until the first image of a restarted refinement arrives, the previous image stays on screen.
+        # Linear, premultiplied pixels: Blender's display transform (view transform, look, exposure) is applied
+        # through the display-space shader, as for Cycles.
+        gpu.state.blend_set('ALPHA_PREMULT')
+        engine.bind_display_space_shader(depsgraph.scene)
+        draw_texture_2d(self._texture, (0, 0), region.width, region.height)
+        engine.unbind_display_space_shader()
+        gpu.state.blend_set('NONE')
+
+    def _status(self, engine):
+        if self.error:
+            engine.update_stats("", f"Photon Splat | Error: {self.error}")
+            return
+        refinement = self.refinement
+        if refinement is None:
+            return
+        if refinement.error:
+            engine.update_stats("", f"Photon Splat | Error: {refinement.error}")
+            return
+        frame = refinement.latest()
+        if frame is None:
+            engine.update_stats("", "Photon Splat | Rendering first image")
+        elif refinement.finished:
+            engine.update_stats("", f"Photon Splat | Done: {frame.passes} passes, {frame.seconds:.1f} s")
+        else:
+            engine.update_stats("", f"Photon Splat | Pass {frame.passes}"
+                                    f"{'/' + str(self.settings.max_passes) if self.settings.max_passes else ''}"
+                                    f" | {frame.seconds:.1f} s")
+
+    # --- the background work ----------------------------------------------------------------------------
+    def restart(self):
+        """Stops the current refinement (without waiting) and starts one for the current scene and view."""
+        if self.refinement is not None:
+            self.refinement.stop()
+        self.refinement = None
+        if self.scene is None or self._make_camera is None or self.settings is None:
+            return
+        width, height = self._view[2], self._view[3]
+        self.restarts += 1
+        self.refinement = refine.Refinement(self.core, self.scene, self._make_camera, width, height,
+                                            self.settings, on_frame=self._redraw).start()
+
+    def _redraw(self, frame):
+        """From the refinement thread: ask Blender to call view_draw (it checks the flag on its main loop)."""
+        engine = self._engine() if self._engine else None
+        if engine is None:
+            return
+        try:
+            engine.tag_redraw()
+        except ReferenceError:        # the viewport closed meanwhile
+            pass
+
+    def stop(self):
+        if self.refinement is not None:
+            self.refinement.stop()
+
+    def join(self, timeout):
+        return self.refinement.join(timeout) if self.refinement is not None else True
+
+
+@bpy.app.handlers.persistent
+def _on_load_pre(*_args):
+    stop_all()
+
+
+def register():
+    bpy.app.handlers.load_pre.append(_on_load_pre)
+
+
+def unregister():
+    if _on_load_pre in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(_on_load_pre)
+    stop_all()

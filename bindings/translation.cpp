@@ -1,0 +1,179 @@
+// What the add-on's scene translation needs beyond the basic Scene: meshes in object space and instances of
+// them (Embree instancing), textures for base colours, spot lights and round area lights.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "photonsplat/errors.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/textures.h"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace ps_py {
+
+namespace {
+
+// The numpy arrays of one mesh, kept alive while the core copies them.
+struct MeshArrays {
+    py::array_t<float, py::array::c_style> vertices, normals, uvs;
+    py::array_t<int32_t, py::array::c_style> triangles, material_ids;
+};
+
+ps::MeshInput mesh_input(const std::string& name, const py::object& vertices_obj, const py::object& triangles_obj,
+                         const py::object& normals_obj, const py::object& uvs_obj, const py::object& material_ids_obj,
+                         MeshArrays& arrays) {
+    const std::string where = "mesh '" + name + "'";
+    arrays.vertices = float_array(vertices_obj, where + ".vertices");
+    require_shape(arrays.vertices, {-1, 3}, where + ".vertices", "(N, 3)");
+    arrays.triangles = index_array(triangles_obj, where + ".triangles");
+    require_shape(arrays.triangles, {-1, 3}, where + ".triangles", "(M, 3)");
+    ps::MeshInput mesh;
+    mesh.name = name;
+    mesh.vertices = arrays.vertices.data();
+    mesh.vertex_count = static_cast<size_t>(arrays.vertices.shape(0));
+    mesh.triangles = arrays.triangles.data();
+    mesh.triangle_count = static_cast<size_t>(arrays.triangles.shape(0));
+    const auto m = static_cast<py::ssize_t>(mesh.triangle_count), n = static_cast<py::ssize_t>(mesh.vertex_count);
+    if (!normals_obj.is_none()) {
+        arrays.normals = float_array(normals_obj, where + ".normals");
+        mesh.normals_per_corner = arrays.normals.ndim() == 3;
+        if (mesh.normals_per_corner)
+            require_shape(arrays.normals, {m, 3, 3}, where + ".normals", "(M, 3, 3) per corner or (N, 3) per vertex");
+        else
+            require_shape(arrays.normals, {n, 3}, where + ".normals", "(N, 3) per vertex or (M, 3, 3) per corner");
+        mesh.normals = arrays.normals.data();
+    }
+    if (!uvs_obj.is_none()) {
+        arrays.uvs = float_array(uvs_obj, where + ".uvs");
+        mesh.uvs_per_corner = arrays.uvs.ndim() == 3;
+        if (mesh.uvs_per_corner)
+            require_shape(arrays.uvs, {m, 3, 2}, where + ".uvs", "(M, 3, 2) per corner or (N, 2) per vertex");
+        else
+            require_shape(arrays.uvs, {n, 2}, where + ".uvs", "(N, 2) per vertex or (M, 3, 2) per corner");
+        mesh.uvs = arrays.uvs.data();
+    }
+    if (!material_ids_obj.is_none()) {
+        arrays.material_ids = index_array(material_ids_obj, where + ".material_ids");
+        require_shape(arrays.material_ids, {m}, where + ".material_ids", "(M,)");
+        mesh.material_ids = arrays.material_ids.data();
+    }
+    return mesh;
+}
+
+uint32_t visibility_bits(bool camera, bool shadow, bool indirect) {
+    return (camera ? ps::kCameraRays : 0u) | (shadow ? ps::kShadowRays : 0u) | (indirect ? ps::kIndirectRays : 0u);
+}
+
+// A (H, W, C) float image -> Texture; rows in Blender's order (row 0 at the bottom).
+ps::Texture texture_from_array(const std::string& name, const py::object& pixels_obj, const std::string& color_space) {
+    const std::string where = "texture '" + name + "'";
+    auto pixels = float_array(pixels_obj, where + ".pixels");
+    if (pixels.ndim() != 3)
+        throw ps::InvalidInput(where + ".pixels", "must be (H, W, C) with C = 1, 3 or 4, got " + shape_of(pixels));
+    return ps::Texture(name, pixels.data(), static_cast<int>(pixels.shape(1)), static_cast<int>(pixels.shape(0)),
+                       static_cast<int>(pixels.shape(2)), ps::color_space_from_string(color_space));
+}
+
+}  // namespace
+
+void bind_translation(py::module_& m) {
+    auto scene = py::reinterpret_borrow<py::class_<ps::Scene>>(m.attr("Scene"));
+    scene
+        .def(
+            "add_mesh_data",
+            [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,
+               const py::object& normals, const py::object& uvs, const py::object& material_ids) {
+                MeshArrays arrays;
+                return s.add_mesh_data(mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays));
+            },
+            "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(), "uvs"_a = py::none(),
+            "material_ids"_a = py::none(),
+            "Adds a mesh in object space without placing it: vertices (N,3), triangles (M,3), optional normals "
+            "(N,3) or (M,3,3), uvs (N,2) or (M,3,2), material_ids (M,). Returns the mesh id for add_instance.")
+        .def(
+            "add_instance",
+            [](ps::Scene& s, uint32_t mesh, const py::object& transform, const std::string& name, bool camera,
+               bool shadow, bool indirect) {
+                return s.add_instance(mesh, mat4(transform, "instance '" + name + "'.transform"), name,
+                                      visibility_bits(camera, shadow, indirect));
+            },
+            "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
+            "visible_indirect"_a = true,
+            "Places mesh mesh_id with a (4,4) row-major object-to-world transform; returns the instance id. "
+            "visible_*: which rays see it (camera rays, shadow rays, every other ray).")
+        .def(
+            "set_instance_transform",
+            [](ps::Scene& s, uint32_t instance, const py::object& transform) {
+                s.set_instance_transform(instance, mat4(transform, "instance.transform"));
+            },
+            "instance_id"_a, "transform"_a,
+            "Moves an instance. Meshes and their BVHs are kept; the next render refits the top-level BVH over the "
+            "instances only (O(instances), no triangle touched). Do not call during a render of this scene.")
+        .def(
+            "add_mesh",
+            [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,
+               const py::object& normals, const py::object& material_ids, const py::object& transform,
+               const py::object& uvs) {
+                MeshArrays arrays;
+                ps::MeshInput mesh = mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays);
+                if (!transform.is_none()) mesh.transform = mat4(transform, "mesh '" + name + "'.transform");
+                s.add_mesh(mesh);
+            },
+            "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(), "material_ids"_a = py::none(),
+            "transform"_a = py::none(), "uvs"_a = py::none(),
+            "Adds a triangle mesh and one instance of it (add_mesh_data + add_instance): vertices (N,3), "
+            "triangles (M,3), optional normals (N,3) or (M,3,3), material_ids (M,), transform (4,4) row-major "
+            "object-to-world, uvs (N,2) or (M,3,2).")
+        .def(
+            "add_texture",
+            [](ps::Scene& s, const std::string& name, const py::object& path, const py::object& pixels,
+               const std::string& color_space) {
+                const ps::ColorSpace space = ps::color_space_from_string(color_space);
+                if (path.is_none() == pixels.is_none())
+                    throw ps::InvalidInput("texture '" + name + "'", "give exactly one of path and pixels");
+                if (!path.is_none()) {
+                    const std::string file = py::str(path);
+                    py::gil_scoped_release release;
+                    return s.add_texture(ps::load_texture(name, file, space, "texture '" + name + "'.path"));
+                }
+                return s.add_texture(texture_from_array(name, pixels, color_space));
+            },
+            "name"_a, "path"_a = py::none(), "pixels"_a = py::none(), "color_space"_a = "sRGB",
+            "Adds an image texture from a file (read with OpenImageIO) or from pixels (H,W,C) with row 0 at the "
+            "bottom (Blender's Image.pixels); color_space 'sRGB' (decoded) or 'linear'. Returns its index for "
+            "add_material(texture=...).")
+        .def(
+            "add_spot_light",
+            [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,
+               const py::object& intensity, float spot_size, float spot_blend, float radius) {
+                ps::Light l;
+                l.name = name;
+                l.kind = ps::LightKind::spot;
+                l.position = vec3(position, "spot light '" + name + "'.position");
+                l.direction = vec3(direction, "spot light '" + name + "'.direction");
+                l.value = vec3(intensity, "spot light '" + name + "'.intensity");
+                l.spot_size = spot_size;
+                l.spot_blend = spot_blend;
+                l.radius = radius;
+                s.add_light(l);
+            },
+            "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
+            "radius"_a = 0.0f,
+            "Spot light: intensity (W/sr) on its axis `direction`, full cone angle spot_size (radians), edge "
+            "blend in [0, 1]; Cycles 3.4's cos θ · smoothstep falloff.")
+        .def_property_readonly("mesh_count", [](const ps::Scene& s) { return s.meshes().size(); })
+        .def_property_readonly("instance_count", [](const ps::Scene& s) { return s.instances().size(); })
+        .def_property_readonly("texture_count", [](const ps::Scene& s) { return s.textures().size(); })
+        .def_property_readonly("stored_triangle_count", &ps::Scene::stored_triangle_count,
+                               "Triangles held in memory (each mesh once, however often it is instanced).")
+        .def_property_readonly("scene_bytes", &ps::Scene::bytes,
+                               "Bytes held by meshes, instances and textures (not the BVH).");
+}
+
+}  // namespace ps_py

@@ -1,0 +1,85 @@
+// Progressive, consistent splatting (beyond the paper): passes of the whole pipeline, each with new photons,
+// camera rays jittered inside their pixels and a smaller radius, averaged into a running mean that converges to
+// the exact answer (Knaus & Zwicker 2011, "Progressive photon mapping: a probabilistic approach").
+//
+// Pass i (1-based) splats with r_i² = r_{i−1}²·(i−1+α)/i, r_1 = the one-shot radius. Its noise grows as 1/r_i²
+// ∝ i^(1−α) while its blur (bias ∝ r_i²) shrinks as i^(α−1); the mean of N passes then has variance ∝ N^(−α)
+// and bias ∝ N^(α−1), both → 0, balanced at α = 2/3: mean squared error ∝ N^(−2/3). Direct light and emission
+// are re-estimated every pass (new shadow rays, jittered pixels) and averaged the same way.
+//
+// Pass 1 is exactly render_pass of pass 0: the user's seed, pixel-centred rays, the one-shot radius; so a
+// progressive render stopped after one pass is the paper's one-shot image, bit for bit.
+//
+// The approximate `directional` method falls back, per pass, to the exact `cluster` splat once the median leaf
+// cluster is more than 2r across (directional_leaves_exceed_radius), whatever level was asked for: without it
+// the mean would converge to the blocky image of a fixed level. stats.values say from which pass it did.
+//
+// Sums are kept per pixel in double: after 10⁴ passes a float running sum would have lost 3–4 digits.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "photonsplat/camera.h"
+#include "photonsplat/render.h"
+
+namespace ps {
+
+class Scene;
+
+class ProgressiveRender {
+public:
+    // Validates settings (InvalidInput) and refuses frames whose buffers and running sums would not fit in
+    // memory. The scene must outlive this object and must not change while it is used.
+    ProgressiveRender(const Scene& scene, const Camera& camera, const RenderSettings& settings);
+
+    // Renders the next pass and adds it to the mean. Throws Cancelled when control asks to stop, leaving the
+    // mean as it was; std::runtime_error when another thread is already running a pass on this object.
+    void run_pass(RenderControl& control);
+
+    // settings.passes are done, or (time_limit > 0) the next pass, predicted to take the mean pass time so far,
+    // would end past time_limit. False before the first pass.
+    bool finished() const;
+
+    int width() const { return camera_.width(); }
+    int height() const { return camera_.height(); }
+    uint32_t passes_done() const;
+    float radius() const;       // the radius of the last pass done (before any: of the first pass)
+    float next_radius() const;  // the radius the next pass will use
+    double elapsed() const;     // seconds spent in completed passes (time between passes is not counted)
+
+    // The mean of the passes done (rgba and components), with their stats summed (seconds, counters) and the
+    // progressive values: "passes", "radius" (first pass), "final_radius", "alpha", "time_limit", "elapsed",
+    // "directional_exact_passes", "directional_exact_from_pass" (1-based, 0 = none). Safe to call from another
+    // thread while a pass runs: it returns the mean without that pass. Empty (width 0) before the first pass.
+    RenderResult result() const;
+    // Only the mean image, height × width × 4 (cheaper than result()); empty before the first pass.
+    std::vector<float> image() const;
+    Stats stats() const;
+
+private:
+    const Scene& scene_;
+    Camera camera_;
+    RenderSettings settings_;
+    size_t pixels_;
+    std::atomic<bool> running_{false};
+
+    mutable std::mutex mutex_;  // guards everything below
+    uint32_t passes_done_ = 0;
+    double radius_sq_;          // of the next pass
+    float last_radius_;
+    float first_radius_;
+    double elapsed_ = 0.0;
+    uint32_t directional_exact_passes_ = 0, directional_exact_from_pass_ = 0;
+    std::vector<double> rgba_sum_, emission_sum_, direct_sum_, indirect_sum_;
+    std::vector<double> caustics_sum_;         // only with settings.caustics_pass
+    std::vector<float> normal_, depth_;        // of pass 0 (pixel-centred rays), as Cycles keeps its first sample's
+    Stats stats_;
+};
+
+// A whole progressive render: passes until finished(), or a cancel (see render() in render.h).
+RenderResult render_progressive(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+                                RenderControl& control);
+
+}  // namespace ps

@@ -1,0 +1,162 @@
+#include "caustic_photons.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include "photonsplat/light_sources.h"
+#include "photonsplat/lights.h"
+#include "photonsplat/materials.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/rng.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
+
+namespace ps {
+
+namespace {
+constexpr uint64_t kChunk = 4096;           // photons per task; chunks are concatenated in order
+constexpr int64_t kMaxCellsPerAxis = (int64_t(1) << 21) - 1;
+constexpr float kCosNormalTolerance = 0.5f;  // τ = 60°, render()'s default
+}  // namespace
+
+bool caustics_by_photons(const LightSources& sources, size_t i) {
+    const Light* light = sources.light(i);
+    return light && (light->kind == LightKind::point || light->kind == LightKind::sun);
+}
+
+std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources& sources, uint64_t count,
+                                          int max_specular_bounces, uint64_t seed, uint64_t pass,
+                                          const RenderControl& control, Stats& stats) {
+    std::vector<Photon> out;
+    // Sources by luminance of their flux, among those whose caustics are photon-mapped.
+    std::vector<size_t> which;
+    std::vector<double> cdf;
+    double total = 0.0;
+    for (size_t i = 0; i < sources.size(); ++i) {
+        const double w = caustics_by_photons(sources, i) ? std::max(0.0f, luminance(sources.flux(i))) : 0.0;
+        if (!(w > 0.0)) continue;
+        which.push_back(i);
+        cdf.push_back(total += w);
+    }
+    bool any_specular = false;
+    for (const Material& m : scene.materials()) any_specular = any_specular || m.is_specular();
+    if (which.empty() || !any_specular || count == 0 || scene.triangle_count() == 0) return out;
+    stats.counters["caustic_photons_emitted"] += static_cast<double>(count);
+
+    const RayTracer& tracer = scene.ray_tracer();
+    const uint64_t chunks = (count + kChunk - 1) / kChunk;
+    std::vector<std::vector<Photon>> per_chunk(chunks);
+    tbb::parallel_for(uint64_t{0}, chunks, [&](uint64_t chunk) {
+        if (control.cancel_requested()) return;
+        const uint64_t end = std::min(count, (chunk + 1) * kChunk);
+        for (uint64_t index = chunk * kChunk; index < end; ++index) {
+            Rng rng(seed, RngDomain::reference_photon, pass * count + index);
+            const double u = rng.uniform() * total;
+            const size_t k = std::min<size_t>(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(), which.size() - 1);
+            const double probability = (cdf[k] - (k ? cdf[k - 1] : 0.0)) / total;
+            const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform(), u4 = rng.uniform(),
+                        u5 = rng.uniform();
+            const EmissionSample emitted = sources.sample_emission(which[k], u1, u2, u3, u4, u5);
+            glm::vec3 power = emitted.power / static_cast<float>(probability);
+            Ray ray{emitted.origin, emitted.direction};
+            for (int bounce = 0; bounce <= max_specular_bounces; ++bounce) {
+                Hit hit;
+                if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
+                const SurfacePoint s = surface_at(scene, ray, hit);
+                if (!s.material->is_specular()) {
+                    // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours. Either way it ends here.
+                    if (bounce > 0)
+                        per_chunk[chunk].push_back(Photon{s.position, -ray.direction, s.geometric_normal, power, kCaustic});
+                    break;
+                }
+                if (bounce == max_specular_bounces) break;
+                const SpecularStep step = scatter_specular(*s.material, s, ray.direction, rng.uniform());
+                const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
+                if (!(keep > 0.0f) || rng.uniform() >= keep) break;
+                power *= step.weight / keep;
+                const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
+                ray = Ray{offset_ray_origin(s.position, side), step.direction};
+            }
+        }
+    });
+    control.check();
+    for (auto& c : per_chunk) out.insert(out.end(), c.begin(), c.end());
+    stats.counters["caustic_photons_stored"] += static_cast<double>(out.size());
+    return out;
+}
+
+CausticPhotonMap::CausticPhotonMap(std::vector<Photon> photons, uint64_t emitted, float radius,
+                                   const glm::vec3& origin)
+    : origin_(origin) {
+    params_.radius = radius;
+    params_.cos_normal_tolerance = kCosNormalTolerance;
+    params_.emitted = std::max<uint64_t>(emitted, 1);
+    params_.kernel = Kernel::uniform;
+    // Photons whose relative position is not finite can pass no test: left out.
+    std::vector<Photon> kept;
+    kept.reserve(photons.size());
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    for (Photon& p : photons) {
+        p.position -= origin;
+        if (!(std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z))) continue;
+        lo = glm::min(lo, p.position);
+        hi = glm::max(hi, p.position);
+        kept.push_back(p);
+    }
+    if (kept.empty()) return;
+    lo_ = lo;
+    // Cell = radius, raised where an axis would need more cells than a key holds (only costs speed).
+    cell_ = radius;
+    for (int a = 0; a < 3; ++a) cell_ = std::max(cell_, (hi[a] - lo[a]) / static_cast<float>(kMaxCellsPerAxis - 1));
+    for (int a = 0; a < 3; ++a) extent_[a] = cell_of(hi[a], a) + 1;
+    std::vector<std::pair<uint64_t, uint32_t>> order(kept.size());
+    for (uint32_t i = 0; i < kept.size(); ++i) {
+        const glm::vec3& p = kept[i].position;
+        order[i] = {key(cell_of(p.x, 0), cell_of(p.y, 1), cell_of(p.z, 2)), i};
+    }
+    std::sort(order.begin(), order.end());  // by cell, then by photon index: a fixed summation order
+    photons_.reserve(kept.size());
+    for (uint32_t i = 0; i < order.size(); ++i) {
+        photons_.push_back(kept[order[i].second]);
+        positions_.push_back(kept[order[i].second].position);
+        auto& range = cells_.try_emplace(order[i].first, i, i).first->second;
+        range.second = i + 1;
+    }
+}
+
+int64_t CausticPhotonMap::cell_of(float v, int axis) const {
+    const double c = std::floor((static_cast<double>(v) - lo_[axis]) / cell_);
+    return static_cast<int64_t>(std::clamp(c, 0.0, static_cast<double>(kMaxCellsPerAxis - 1)));
+}
+
+glm::vec3 CausticPhotonMap::radiance(const ViewSample& s) const {
+    if (photons_.empty()) return glm::vec3(0.0f);
+    const float r = params_.radius;
+    int64_t from[3] = {0, 0, 0}, to[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+        if (!(s.position[a] + r >= lo_[a])) return glm::vec3(0.0f);
+        from[a] = cell_of(s.position[a] - r, a);
+        to[a] = std::min(cell_of(s.position[a] + r, a), extent_[a] - 1);
+        if (from[a] > to[a]) return glm::vec3(0.0f);
+    }
+    glm::dvec3 sum(0.0);
+    for (int64_t z = from[2]; z <= to[2]; ++z)
+        for (int64_t y = from[1]; y <= to[1]; ++y)
+            for (int64_t x = from[0]; x <= to[0]; ++x) {
+                const auto found = cells_.find(key(x, y, z));
+                if (found == cells_.end()) continue;
+                for (uint32_t i = found->second.first; i < found->second.second; ++i)
+                    if (photon_reaches_sample(s, positions_[i], photons_[i], params_))
+                        sum += photon_reflected_flux(s, positions_[i], photons_[i], params_);
+            }
+    return finish_sample(s, sum, params_);
+}
+
+}  // namespace ps

@@ -1,0 +1,75 @@
+"""Progressive F12 inside Blender: scene.photonsplat.passes / time_limit reach the core, the running mean is
+shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported. ~5 s."""
+import bpy
+import numpy as np
+import pytest
+
+from blender_helpers import render_pixels, use_photonsplat
+from photonsplat import engine
+
+
+def test_passes_and_time_limit_are_exported(caustics_scene, core):
+    from photonsplat import export
+
+    use_photonsplat(caustics_scene, 32, 1000, passes=7, time_limit=2.5)
+    settings = export.render_settings(core, caustics_scene.photonsplat)
+    assert settings.passes == 7 and settings.time_limit == 2.5
+
+
+def test_f12_renders_passes_and_shows_each(caustics_scene, monkeypatch, tmp_path, core):
+    use_photonsplat(caustics_scene, 48, 5000, passes=3)
+    shown = []
+    real_write = engine._write_pixels
+
+    def count_writes(result, frame, image):  # after every pass, and once at the end
+        shown.append(1)
+        return real_write(result, frame, image)
+
+    monkeypatch.setattr(engine, "_write_pixels", count_writes)
+    pixels = render_pixels(tmp_path / "three_passes.exr")
+    outcome = engine.last_outcome
+    assert outcome.status == "finished", outcome.message
+    assert outcome.stats["values"]["passes"] == 3 and "3 passes" in outcome.message
+    assert len(shown) == 3 + 1
+    assert np.isfinite(pixels).all() and pixels[..., :3].mean() > 0.01
+    # One pass is the one-shot render, bit for bit, through the same engine path.
+    caustics_scene.photonsplat.passes = 1
+    one = render_pixels(tmp_path / "one_pass.exr")
+    image, _ = core.render(*_exported(core, caustics_scene))
+    assert np.array_equal(one, image[::-1])
+
+
+def _exported(core, scene):
+    from photonsplat import export
+
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    return frame.scene, frame.camera, frame.settings
+
+
+def test_escape_after_a_pass_keeps_the_mean(caustics_scene, monkeypatch, tmp_path, core):
+    use_photonsplat(caustics_scene, 48, 5000, passes=500)
+    shown = []
+    real_write = engine._write_pixels
+
+    def count_writes(result, frame, image):  # after every pass, and once at the end
+        shown.append(1)
+        return real_write(result, frame, image)
+
+    monkeypatch.setattr(engine, "_write_pixels", count_writes)
+    # Esc once two passes are on screen: pass 3 is cancelled, the mean of two is kept.
+    monkeypatch.setattr(engine.PhotonSplatRenderEngine, "_cancel_requested", lambda self: len(shown) >= 2)
+    pixels = render_pixels(tmp_path / "escaped.exr")
+    outcome = engine.last_outcome
+    assert outcome.status == "finished", outcome.message
+    values = outcome.stats["values"]
+    assert values["cancelled"] == 1 and values["passes"] == 2
+    assert "stopped by Esc" in outcome.message
+    assert np.isfinite(pixels).all() and pixels[..., :3].mean() > 0.01
+
+
+def test_no_pass_limit_without_time_limit_is_reported(caustics_scene, tmp_path, core):
+    use_photonsplat(caustics_scene, 32, 1000, passes=0, time_limit=0.0)
+    with pytest.raises(RuntimeError, match="passes"):
+        render_pixels(tmp_path / "never.exr")          # reported, and the result closed
+    outcome = engine.last_outcome
+    assert outcome.status == "failed" and "passes" in outcome.message

@@ -1,0 +1,95 @@
+"""Viewport responsiveness of Photon Splat in a real Blender window: after a light moves, how long until the
+first new image is on screen, and until the refined image (the viewport's pass limit) is.
+
+Drives Blender's own window under Xvfb (not the engine's Python API) because the figure users feel includes
+what the API would skip: the depsgraph update reaching view_update, the scene-cache sync, the texture upload and
+the redraw Blender schedules. Times are taken on Blender's main thread when view_draw uploads an image
+(photonsplat.viewport.ViewportSession.draw_log), from just before the script moves the light.
+
+    bash tools/viewport_timing.sh            # writes docs/results/viewport_timing.json and prints a summary
+
+Settings measured: the defaults of scene.photonsplat (first image 20k photons at 1/4 resolution, refinement
+passes of 100k photons, 32 passes or 30 s) except viewport_passes, given by PHOTONSPLAT_REFINED_PASSES (8).
+"""
+
+import json
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import bpy
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "tools"))
+import blender_window as bw     # noqa: E402
+
+MOVES = int(os.environ.get("PHOTONSPLAT_MOVES", "5"))
+REFINED_PASSES = int(os.environ.get("PHOTONSPLAT_REFINED_PASSES", "8"))
+OUTPUT = Path(os.environ.get("PHOTONSPLAT_TIMING_OUTPUT", REPO / "docs" / "results" / "viewport_timing.json"))
+
+
+def wait_for(predicate, timeout):
+    started = time.perf_counter()
+    while not predicate():
+        if time.perf_counter() - started > timeout:
+            raise RuntimeError("timed out waiting for the viewport")
+        yield 0.01
+
+
+def drawn_after(session, moved_at, restart, passes):
+    """Time from moved_at to the first draw of `passes` passes of a refinement newer than `restart`."""
+    for when, number, done in session.draw_log:
+        if when >= moved_at and number > restart and done >= passes:
+            return when - moved_at
+    return None
+
+
+def steps():
+    scene = bpy.context.scene
+    scene.render.engine = 'PHOTONSPLAT'
+    scene.photonsplat.viewport_passes = REFINED_PASSES
+    window, area, region, space = bw.view3d()
+    bw.rendered_through_camera(space)
+    yield 0.5
+    yield from wait_for(lambda: bw.session() is not None and bw.session().refinement is not None, 30)
+    session = bw.session()
+    yield from wait_for(lambda: session.refinement.finished or session.refinement.error, 120)
+    assert session.refinement.error is None, session.refinement.error
+
+    light = bpy.data.objects["Light"]
+    rows = []
+    for move in range(MOVES):
+        restart = session.restarts
+        moved_at = time.perf_counter()
+        light.location.x += 0.05 if move % 2 == 0 else -0.05
+        yield from wait_for(lambda: drawn_after(session, moved_at, restart, 0) is not None, 30)
+        first = drawn_after(session, moved_at, restart, 0)
+        yield from wait_for(lambda: drawn_after(session, moved_at, restart, REFINED_PASSES) is not None, 120)
+        refined = drawn_after(session, moved_at, restart, REFINED_PASSES)
+        sync = session.last_sync
+        rows.append(dict(first_image_s=first, refined_s=refined, meshes_exported=sync.meshes,
+                         lights_exported=sync.lights))
+        print(f"viewport_timing: move {move + 1}: first image {first * 1000:.0f} ms, "
+              f"{REFINED_PASSES} passes {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights})")
+        yield 0.3
+
+    settings = scene.photonsplat
+    summary = dict(
+        scene="blend_scenes/cornell_caustics.blend", window="1280x720", region=f"{region.width}x{region.height}",
+        view="camera view, default Layout workspace", blender=bpy.app.version_string,
+        cpu_threads=os.cpu_count(), moves=rows,
+        first_image_median_s=statistics.median(r["first_image_s"] for r in rows),
+        refined_median_s=statistics.median(r["refined_s"] for r in rows),
+        settings=dict(first_pass_photons=settings.viewport_preview_photons,
+                      first_pass_pixel_size=settings.viewport_preview_divider,
+                      photons_per_pass=settings.viewport_photons, refined_passes=REFINED_PASSES,
+                      method=settings.method))
+    OUTPUT.parent.mkdir(parents=True, exist_ok=True)
+    OUTPUT.write_text(json.dumps(summary, indent=2) + "\n")
+    print(f"viewport_timing: region {summary['region']}: first image {summary['first_image_median_s'] * 1000:.0f} ms,"
+          f" refined ({REFINED_PASSES} passes) {summary['refined_median_s']:.2f} s (medians of {MOVES}); {OUTPUT}")
+
+
+bw.run_steps(steps(), timeout=900.0)
