@@ -1,7 +1,8 @@
 // libFuzzer target over the entry points a script or the add-on reaches: Scene::add_material / add_mesh /
 // add_light / set_background, the Camera constructor, validate(RenderSettings) and render(). The input bytes are
-// decoded into a small scene (<= 4 materials, <= 3 meshes of <= 12 vertices and triangles, <= 3 lights), a camera
-// of <= 12×12 pixels and settings with <= 1500 photons, so that one input runs in milliseconds.
+// decoded into a small scene (<= 4 materials, <= 3 meshes of <= 12 vertices and triangles, some instanced twice,
+// <= 3 lights), a camera of <= 12×12 pixels and settings with <= 1500 photons and <= 2 progressive passes, so
+// that one input runs in milliseconds.
 //
 // What counts as a failure: a crash or sanitizer report (the build adds address and undefined), an exception other
 // than InvalidInput (bad input must be refused naming the field), or a non-finite pixel from a render the core
@@ -90,6 +91,13 @@ void add_meshes(FuzzedDataProvider& in, Scene& scene) {
         }
         try {
             scene.add_mesh(mesh);
+            // Sometimes a second instance of the mesh just added, anywhere.
+            if (!scene.meshes().empty() && in.ConsumeIntegralInRange<int>(0, 3) == 0) {
+                glm::mat4 to_world(1.0f);
+                for (int c = 0; c < 4; ++c)
+                    for (int r = 0; r < 3; ++r) to_world[c][r] = any_float(in, 3.0f);
+                scene.add_instance(static_cast<uint32_t>(scene.meshes().size() - 1), to_world, mesh.name + "_copy");
+            }
         } catch (const InvalidInput&) {
         }
     }
@@ -162,6 +170,10 @@ RenderSettings make_settings(FuzzedDataProvider& in) {
     s.kernel = in.ConsumeBool() ? Kernel::uniform : Kernel::epanechnikov;
     s.directional_level = in.ConsumeIntegralInRange<int>(-2, 8);
     s.memory_budget = in.ConsumeBool() ? 0 : in.ConsumeIntegralInRange<uint64_t>(0, uint64_t(64) << 20);
+    s.passes = in.ConsumeIntegralInRange<uint32_t>(0, 2);  // 0 needs a time limit; 2 runs the progressive path
+    s.time_limit = in.ConsumeBool() ? 0.0 : 0.05;
+    s.caustics_pass = in.ConsumeBool();
+    s.transparent = in.ConsumeBool();
     return s;
 }
 
@@ -180,9 +192,14 @@ void describe(const Scene& scene, const Camera& camera, const RenderSettings& s)
                      l.name.c_str(), int(l.kind), l.value.x, l.value.y, l.value.z, l.position.x, l.position.y,
                      l.position.z, l.direction.x, l.direction.y, l.direction.z, l.radius, l.angle, l.axis_u.x,
                      l.axis_u.y, l.axis_u.z, l.axis_v.x, l.axis_v.y, l.axis_v.z);
-    for (const Triangle& t : scene.triangles())
-        std::fprintf(stderr, "triangle (%g %g %g) (%g %g %g) (%g %g %g) material %u\n", t.v0.x, t.v0.y, t.v0.z, t.v1.x,
-                     t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z, t.material);
+    for (uint32_t i = 0; i < scene.instances().size(); ++i) {
+        const MeshData& mesh = scene.meshes()[scene.instances()[i].mesh];
+        for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+            const WorldTriangle w = scene.world_triangle(i, t);
+            std::fprintf(stderr, "instance %u triangle (%g %g %g) (%g %g %g) (%g %g %g)\n", i, w.v0.x, w.v0.y, w.v0.z,
+                         w.v1.x, w.v1.y, w.v1.z, w.v2.x, w.v2.y, w.v2.z);
+        }
+    }
     const glm::vec3 b = scene.background();
     std::fprintf(stderr, "background %g %g %g\n", b.x, b.y, b.z);
 }
