@@ -10,5 +10,6 @@ void bind_metrics(pybind11::module_& m);      // metrics.cpp: psnr, ssim, rmse, 
 void bind_reference(pybind11::module_& m);    // reference.cpp: render_reference
 void bind_translation(pybind11::module_& m);  // translation.cpp: meshes + instances, textures, spot lights
 void bind_progressive(pybind11::module_& m);  // progressive.cpp: Progressive (stepping, for the viewport)
+void bind_scene_updates(pybind11::module_& m);  // scene_updates.cpp: Scene.clear_lights (viewport updates)
 
 }  // namespace ps_py

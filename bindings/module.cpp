@@ -248,4 +248,5 @@ PYBIND11_MODULE(_core, m) {
     bind_reference(m);
     bind_translation(m);
     bind_progressive(m);
+    bind_scene_updates(m);
 }

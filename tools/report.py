@@ -333,7 +333,8 @@ def write_outputs(args):
                               f"{c['ssim']:.5f}", f"{c['psnr']:.3f}", f"{c['relmse']:.6g}", f"{c['rmse']:.6g}"])
 
     lines = ["# Speed against error: report", "",
-             "Regenerate with `bash tools/run_report.sh` (see its header; about 20 minutes on 2 cores). Every figure "
+             "Regenerate with `bash tools/run_report.sh` (see its header; 12 minutes on 2 cores with the references, "
+             "about 7 without). Every figure "
              "is measured against a converged reference of the same exported scene at the same resolution. SSIM "
              "and PSNR are on the display luma (linear → clamp [0, 1] → sRGB), relMSE on linear radiance "
              "(ε = 1e-2). Times are wall-clock seconds on this machine, shared with other jobs: the load average "
@@ -346,10 +347,15 @@ def write_outputs(args):
     for r in records:
         name = r["scene"]
         body += [f"## `{name}.blend` at {r['width']}×{r['height']}", "",
-                 f"Reference: {r['reference']['kind']}, {r['reference']['samples']} samples per pixel "
+                 f"Reference: {r['reference']['kind']}, {r['reference']['samples']:.0f} samples per pixel "
                  f"({r['reference'].get('seconds', float('nan')):.0f} s when rendered). Load average "
                  f"{r['load_at_start']:.1f} at the start, {r.get('load_at_end', float('nan')):.1f} at the end, "
                  f"{r['cores']} cores.", ""]
+        brightness = relative_brightness(r, measured / name)
+        if brightness:
+            body += ["Mean linear radiance relative to the reference (a systematic offset caps SSIM below 1 however "
+                     "long a renderer runs): " + "; ".join(f"{k} {v:.3f}" for k, v in brightness.items()) + ".",
+                     ""]
         body += ["One-shot renders, shaped like the paper's tables (SSIM %, PSNR dB; the engine's automatic radius "
                  "for each photon count; `cluster_cone` is the paper's cluster-trivial):", "",
                  "| photons, radius | " + " | ".join(f"{m} SSIM | PSNR | relMSE | s" for m in TABLE_METHODS) + " |",
@@ -419,6 +425,15 @@ def write_outputs(args):
     print(text)
 
 
+def relative_brightness(record, folder):
+    reference = np.load(folder / "reference.npy")
+    snaps = np.load(folder / "snapshots.npz")
+    mean = float(np.mean(reference[..., :3]))
+    if not mean > 0:
+        return {}
+    return {s["label"]: float(np.mean(snaps[s["key"]][..., :3])) / mean for s in record["snapshots"]}
+
+
 def plot_scene(plt, record, curves, path):
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
     for method, curve in curves.items():
@@ -452,15 +467,17 @@ def to_display(image):
     return np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1.0 / 2.4) - 0.055)
 
 
-def crop_window(reference):
-    """A window of half the image's size where the reference has the most detail (local luma variance)."""
+def crop_window(reference, image=None):
+    """A window of half the image's size: where `image` is furthest from the reference (display luma), or, without
+    an image, where the reference has the most detail (local luma variance)."""
     luma = display_luma(reference)
+    error = None if image is None else np.abs(display_luma(image) - luma)
     h, w = luma.shape
     ch, cw = max(8, h // 2), max(8, w // 2)
     best, where = -1.0, (0, 0)
     for y in range(0, h - ch + 1, max(1, ch // 4)):
         for x in range(0, w - cw + 1, max(1, cw // 4)):
-            v = float(np.var(luma[y:y + ch, x:x + cw]))
+            v = float(np.var(luma[y:y + ch, x:x + cw]) if error is None else np.mean(error[y:y + ch, x:x + cw]))
             if v > best:
                 best, where = v, (y, x)
     y, x = where
@@ -478,7 +495,8 @@ def crop_figure(plt, record, folder, path):
         if label in by_label:
             s = by_label[label]
             panels.append((label, snaps[s["key"]], s["seconds"]))
-    ys, xs = crop_window(reference)
+    early = by_label.get("progressive 1 s")
+    ys, xs = crop_window(reference, snaps[early["key"]] if early else None)
     fig, axes = plt.subplots(1, len(panels), figsize=(2.2 * len(panels), 2.6))
     for ax, (label, image, seconds) in zip(np.atleast_1d(axes), panels):
         ax.imshow(to_display(image[ys, xs]), interpolation="nearest")

@@ -1,5 +1,6 @@
-"""Viewport responsiveness of Photon Splat in a real Blender window: after a light moves, how long until the
-first new image is on screen, and until the refined image (the viewport's pass limit) is.
+"""Viewport responsiveness of Photon Splat in a real Blender window: after a light moves (then after an object
+moves), how long until the first new image is on screen, and until the refined image (the viewport's pass
+limit) is.
 
 Drives Blender's own window under Xvfb (not the engine's Python API) because the figure users feel includes
 what the API would skip: the depsgraph update reaching view_update, the scene-cache sync, the texture upload and
@@ -46,6 +47,43 @@ def drawn_after(session, moved_at, restart, passes):
     return None
 
 
+def measure_moves(session, ob, label):
+    """Moves `ob` MOVES times by 5 cm along x; per move, the times to the first and to the refined image."""
+    rows = []
+    for move in range(MOVES):
+        restart = session.restarts
+        moved_at = time.perf_counter()
+        ob.location.x += 0.05 if move % 2 == 0 else -0.05
+        yield from wait_for(lambda: drawn_after(session, moved_at, restart, 0) is not None, 30)
+        first = drawn_after(session, moved_at, restart, 0)
+        yield from wait_for(lambda: drawn_after(session, moved_at, restart, REFINED_PASSES) is not None, 120)
+        refined = drawn_after(session, moved_at, restart, REFINED_PASSES)
+        sync = session.last_sync
+        rows.append(dict(first_image_s=first, refined_s=refined, meshes_exported=sync.meshes,
+                         lights_exported=sync.lights, instances_moved=sync.moved, scene_rebuilt=sync.rebuilt,
+                         main_thread_wait_s=session.release_seconds))
+        print(f"viewport_timing: {label} {move + 1}: first image {first * 1000:.0f} ms, "
+              f"{REFINED_PASSES} passes {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights}, "
+              f"instances moved {sync.moved}, scene rebuilt {sync.rebuilt}, main thread waited "
+              f"{session.release_seconds * 1000:.0f} ms for the refinement to stop)")
+        yield 0.3
+    return rows
+
+
+def measure_busy_waits(session, ob):
+    """Moves `ob` while a refinement pass is running (1 s after the previous move), as a drag does: how long
+    view_update waits on the main thread for that pass to stop before the scene changes in place."""
+    waits = []
+    for move in range(MOVES):
+        yield 1.0
+        ob.location.x += 0.05 if move % 2 == 0 else -0.05
+        yield 0.05
+        waits.append(session.release_seconds)
+        print(f"viewport_timing: move during a pass {move + 1}: main thread waited "
+              f"{session.release_seconds * 1000:.0f} ms (scene rebuilt {session.last_sync.rebuilt})")
+    return waits
+
+
 def steps():
     scene = bpy.context.scene
     scene.render.engine = 'PHOTONSPLAT'
@@ -58,30 +96,20 @@ def steps():
     yield from wait_for(lambda: session.refinement.finished or session.refinement.error, 120)
     assert session.refinement.error is None, session.refinement.error
 
-    light = bpy.data.objects["Light"]
-    rows = []
-    for move in range(MOVES):
-        restart = session.restarts
-        moved_at = time.perf_counter()
-        light.location.x += 0.05 if move % 2 == 0 else -0.05
-        yield from wait_for(lambda: drawn_after(session, moved_at, restart, 0) is not None, 30)
-        first = drawn_after(session, moved_at, restart, 0)
-        yield from wait_for(lambda: drawn_after(session, moved_at, restart, REFINED_PASSES) is not None, 120)
-        refined = drawn_after(session, moved_at, restart, REFINED_PASSES)
-        sync = session.last_sync
-        rows.append(dict(first_image_s=first, refined_s=refined, meshes_exported=sync.meshes,
-                         lights_exported=sync.lights))
-        print(f"viewport_timing: move {move + 1}: first image {first * 1000:.0f} ms, "
-              f"{REFINED_PASSES} passes {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights})")
-        yield 0.3
+    light_rows = yield from measure_moves(session, bpy.data.objects["Light"], "light move")
+    object_rows = yield from measure_moves(session, bpy.data.objects["GlassSphere"], "object move")
+    busy_waits = yield from measure_busy_waits(session, bpy.data.objects["Light"])
 
     settings = scene.photonsplat
     summary = dict(
         scene="blend_scenes/cornell_caustics.blend", window="1280x720", region=f"{region.width}x{region.height}",
         view="camera view, default Layout workspace", blender=bpy.app.version_string,
-        cpu_threads=os.cpu_count(), moves=rows,
-        first_image_median_s=statistics.median(r["first_image_s"] for r in rows),
-        refined_median_s=statistics.median(r["refined_s"] for r in rows),
+        cpu_threads=os.cpu_count(), load_average=os.getloadavg(), moves=light_rows, object_moves=object_rows,
+        first_image_median_s=statistics.median(r["first_image_s"] for r in light_rows),
+        refined_median_s=statistics.median(r["refined_s"] for r in light_rows),
+        object_first_image_median_s=statistics.median(r["first_image_s"] for r in object_rows),
+        object_refined_median_s=statistics.median(r["refined_s"] for r in object_rows),
+        busy_main_thread_waits_s=busy_waits,
         settings=dict(first_pass_photons=settings.viewport_preview_photons,
                       first_pass_pixel_size=settings.viewport_preview_divider,
                       photons_per_pass=settings.viewport_photons, refined_passes=REFINED_PASSES,
@@ -89,7 +117,11 @@ def steps():
     OUTPUT.parent.mkdir(parents=True, exist_ok=True)
     OUTPUT.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"viewport_timing: region {summary['region']}: first image {summary['first_image_median_s'] * 1000:.0f} ms,"
-          f" refined ({REFINED_PASSES} passes) {summary['refined_median_s']:.2f} s (medians of {MOVES}); {OUTPUT}")
+          f" refined ({REFINED_PASSES} passes) {summary['refined_median_s']:.2f} s after a light move; object move:"
+          f" first image {summary['object_first_image_median_s'] * 1000:.0f} ms,"
+          f" refined {summary['object_refined_median_s']:.2f} s; main-thread wait during a pass: max"
+          f" {max(busy_waits) * 1000:.0f} ms (medians of {MOVES}; load average"
+          f" {summary['load_average'][0]:.1f}); {OUTPUT}")
 
 
 bw.run_steps(steps(), timeout=900.0)

@@ -1,8 +1,9 @@
 """The 3D viewport in Rendered shading: what RenderEngine.view_update / view_draw do for Photon Splat.
 
 Both run on Blender's main thread, so neither may wait on the core:
-  - view_update (a depsgraph change) updates the scene cache (export/scene_cache.py: only what changed is read
-    from Blender), builds the core scene and restarts the refinement;
+  - view_update (a depsgraph change) updates the core scene through the scene cache (export/scene_cache.py:
+    only what changed is read from Blender; moved objects and lights are changed in the existing core scene
+    once the running refinement has stopped) and restarts the refinement;
   - view_draw compares the view (matrices, region size) with the one being rendered, restarts the refinement
     when it changed (navigation produces no view_update), and draws the newest image it has.
 The rendering itself runs in refine.Refinement's thread; it asks Blender for a redraw after every image.
@@ -22,6 +23,10 @@ from . import export, refine
 from .export.scene_cache import SceneCache
 
 _sessions = weakref.WeakSet()
+
+# Longest wait on Blender's main thread for a refinement to stop before its scene is changed in place (a
+# cancelled pass ends within ~0.1 s; an Embree build in progress may take longer, then a new scene is built).
+RELEASE_WAIT = 0.5
 
 
 def stop_all(wait=1.0):
@@ -72,11 +77,12 @@ class ViewportSession:
     def __init__(self, core):
         self.core = core
         self.cache = SceneCache()
-        self.scene = None             # core Scene built from the cache
+        self.scene = None             # core Scene kept up to date by the cache
         self.settings = None
         self.refinement = None
         self.error = None
         self.last_sync = None         # SyncReport of the last view_update
+        self.release_seconds = 0.0    # main-thread wait for the refinement to stop, last in-place update
         self._view = None
         self._make_camera = None
         self._texture = None
@@ -93,11 +99,12 @@ class ViewportSession:
         self._engine = weakref.ref(engine)
         try:
             settings = refine_settings(self.core, depsgraph.scene)
-            self.last_sync = self.cache.sync(depsgraph)
-            changed = self.last_sync.changed or self.scene is None or settings != self.settings
+            self.last_sync = self.cache.sync(self.core, depsgraph, release=self._release_scene)
+            # (A refinement stopped for an in-place change is restarted even if the change showed nothing.)
+            changed = (self.last_sync.changed or self.scene is None or settings != self.settings
+                       or self.refinement is None)
             self.settings = settings
-            if self.last_sync.changed or self.scene is None:
-                self.scene = self.cache.build(self.core)
+            self.scene = self.cache.scene
             self.error = None
         except (ValueError, export.ExportError) as error:
             self.error = str(error)
@@ -105,6 +112,21 @@ class ViewportSession:
             changed = True
         if changed:               # selection and other changes that do not show restart nothing
             self.restart()
+
+    def _release_scene(self):
+        """Before the cache changes the core scene in place (moved objects, lights): the running refinement
+        must be done with it. Stops it and waits up to RELEASE_WAIT s on the main thread (a pass polls its
+        cancel flag about 10x a second); False when it is still running, and the cache builds a new scene."""
+        self.release_seconds = 0.0
+        if self.refinement is None:
+            return True
+        started = time.perf_counter()
+        self.refinement.stop()
+        stopped = self.refinement.join(RELEASE_WAIT)
+        self.release_seconds = time.perf_counter() - started
+        if stopped:
+            self.refinement = None
+        return stopped
 
     # --- view_draw --------------------------------------------------------------------------------------
     def draw(self, engine, context, depsgraph):

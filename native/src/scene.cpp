@@ -80,6 +80,8 @@ void Scene::add_light(const Light& light) {
     lights_.push_back(light);
 }
 
+void Scene::clear_lights() { lights_.clear(); }
+
 void Scene::set_background(const glm::vec3& radiance) {
     require_nonnegative_rgb(radiance, "background");
     background_ = radiance;

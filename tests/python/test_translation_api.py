@@ -94,3 +94,26 @@ def test_spot_and_round_area_lights_validate_their_fields():
     with pytest.raises(ValueError, match="shape"):
         scene.add_area_light("bad", center=(0, 0, 2), axis_u=(1, 0, 0), axis_v=(0, 1, 0), radiance=(1, 1, 1),
                              shape="star")
+
+
+def test_clear_lights_then_new_lights_render_as_a_fresh_scene():
+    """What the viewport does when a light moves: the meshes (and their BVH) stay, the lights are replaced."""
+    def quad_scene():
+        scene = ps.Scene()
+        scene.add_material(name="white", color=(0.8, 0.8, 0.8))
+        scene.add_instance(scene.add_mesh_data("quad", QUAD_V * 8, QUAD_T), np.eye(4))
+        return scene
+
+    settings = ps.RenderSettings(photons=2000, seed=5, threads=1)
+    kept = quad_scene()
+    kept.add_point_light(name="lamp", position=(1.0, 0.0, 2.0), intensity=(10.0, 10.0, 10.0))
+    ps.render(kept, top_camera(), settings)                          # builds the BVH
+    kept.clear_lights()
+    assert (kept.light_count, kept.mesh_count, kept.instance_count) == (0, 1, 1)
+    kept.add_point_light(name="lamp", position=(-1.0, 0.0, 2.0), intensity=(10.0, 10.0, 10.0))
+    fresh = quad_scene()
+    fresh.add_point_light(name="lamp", position=(-1.0, 0.0, 2.0), intensity=(10.0, 10.0, 10.0))
+    image, _ = ps.render(kept, top_camera(), settings)
+    expected, _ = ps.render(fresh, top_camera(), settings)
+    assert image[..., :3].mean() > 0.01
+    np.testing.assert_array_equal(image, expected)

@@ -91,6 +91,9 @@ public:
     void set_instance_transform(uint32_t instance, const glm::mat4& to_world);
     void add_mesh(const MeshInput& mesh);              // add_mesh_data + add_instance(mesh.transform)
     void add_light(const Light& light);
+    // Removes every light, so that moved or edited lights can be added again without rebuilding the meshes or
+    // the BVH (lights are read afresh by each render). Not to be called while a render of this scene runs.
+    void clear_lights();
     void set_background(const glm::vec3& radiance);    // world colour × strength, seen by camera rays
 
     const std::vector<Material>& materials() const { return materials_; }

@@ -1,0 +1,19 @@
+// In-place changes to a Scene that already holds meshes, for the viewport's incremental updates: a moved light
+// replaces the lights without touching meshes or the BVH. (Moving instances is set_instance_transform, in
+// translation.cpp next to add_instance.)
+#include <pybind11/pybind11.h>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "photonsplat/scene.h"
+
+namespace ps_py {
+
+void bind_scene_updates(py::module_& m) {
+    auto scene = py::reinterpret_borrow<py::class_<ps::Scene>>(m.attr("Scene"));
+    scene.def("clear_lights", &ps::Scene::clear_lights,
+              "Removes every light (meshes, instances, materials, textures, background and the BVH stay), so "
+              "that the lights can be added again after a change. Do not call during a render of this scene.");
+}
+
+}  // namespace ps_py
