@@ -99,7 +99,8 @@ py::dict to_dict(const std::map<std::string, double>& m) {
 
 py::dict stats_dict(const ps::Stats& stats) {
     return py::dict("seconds"_a = to_dict(stats.seconds), "counters"_a = to_dict(stats.counters),
-                    "bytes"_a = to_dict(stats.bytes), "values"_a = to_dict(stats.values));
+                    "bytes"_a = to_dict(stats.bytes), "values"_a = to_dict(stats.values),
+                    "predicted_bytes"_a = to_dict(stats.predicted_bytes));
 }
 
 py::dict pass_images(const ps::RenderResult& r) {

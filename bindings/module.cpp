@@ -13,6 +13,7 @@
 #include "bindings.h"
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/memory_budget.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 
@@ -34,7 +35,8 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
                                  uint64_t seed, int threads, int direct_samples, float normal_tolerance,
                                  float plane_distance, const std::string& kernel, int directional_level,
                                  int64_t passes, double time_limit, float alpha, bool guide_photons,
-                                 bool caustics_pass, bool transparent) {
+                                 bool caustics_pass, bool transparent,
+                                 uint64_t memory_budget) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -47,6 +49,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.plane_distance = plane_distance;
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
+    s.memory_budget = memory_budget;
     s.passes = pass_count(passes);
     s.time_limit = time_limit;
     s.alpha = alpha;
@@ -183,7 +186,7 @@ PYBIND11_MODULE(_core, m) {
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
              "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
              "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
-             "transparent"_a = false)
+             "transparent"_a = false, "memory_budget"_a = 0)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -199,6 +202,8 @@ PYBIND11_MODULE(_core, m) {
             "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
             [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
         .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
+        .def_readwrite("memory_budget", &ps::RenderSettings::memory_budget,
+                       "bytes the render may hold; 0 = 3/4 of this machine's (or container's) memory")
         .def_property(
             "passes", [](const ps::RenderSettings& s) { return s.passes; },
             [](ps::RenderSettings& s, int64_t v) { s.passes = pass_count(v); },
@@ -222,7 +227,7 @@ PYBIND11_MODULE(_core, m) {
               << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
               << ", guide_photons=" << (s.guide_photons ? "True" : "False")
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
-              << ", transparent=" << (s.transparent ? "True" : "False") << ")";
+              << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
             return o.str();
         });
 
@@ -234,6 +239,9 @@ PYBIND11_MODULE(_core, m) {
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
           "settings.passes != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
           "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
+
+    m.def("default_memory_budget", &ps::default_memory_budget,
+          "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");
 
     bind_images(m);
     bind_metrics(m);

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # README command (2): install what is missing, build, and run every test: the native GoogleTest suite (ctest),
-# the Python API tests (pytest on /usr/bin/python3), the Blender tests (pytest inside blender -b) and the
-# real-window viewport test (Blender under Xvfb; its screenshot stays in build/test-artifacts/).
+# the Python API tests (pytest on /usr/bin/python3), the Blender tests (pytest inside blender -b), the
+# real-window viewport test (Blender under Xvfb; its screenshot stays in build/test-artifacts/), and the
+# sanitizer and fuzzing runs of scripts/sanitize.sh (ASan+UBSan suite, TSan on cross-thread control, 60 s of
+# libFuzzer; PHOTONSPLAT_SANITIZE_STEPS="" skips them, e.g. for a quick local run).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/install-deps.sh"
@@ -24,5 +26,8 @@ echo "== Blender tests (pytest inside blender -b)"
 
 echo "== real-window test (Blender under Xvfb: Rendered viewport screenshot)"
 bash "$root/tests/window/run.sh" || status=1
+
+echo "== sanitizers and fuzzing (scripts/sanitize.sh)"
+bash "$root/scripts/sanitize.sh" || status=1
 
 exit $status

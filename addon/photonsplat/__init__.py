@@ -33,6 +33,7 @@ try:
         RELMSE_EPSILON,
         psnr,
         relmse,
+        default_memory_budget,
         render,
         render_reference,
         rmse,

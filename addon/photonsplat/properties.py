@@ -93,6 +93,14 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
         default=0, min=0, soft_max=256,
     )
 
+    memory_budget: FloatProperty(
+        name="Memory Budget (GiB)",
+        description="Memory a render may hold, in GiB. A render whose structures would not fit is refused before "
+                    "allocating, with a message naming the structure and what to lower. "
+                    "0 uses three quarters of this machine's memory",
+        default=0.0, min=0.0, soft_max=256.0, precision=1,
+    )
+
     # --- viewport (Rendered shading): a fast first image, then refinement in the background ---------------
     viewport_preview_photons: IntProperty(
         name="First Pass Photons",

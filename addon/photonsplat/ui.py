@@ -93,6 +93,7 @@ class RENDER_PT_photonsplat_performance(PhotonSplatPanel, Panel):
         layout.use_property_split = True
         layout.use_property_decorate = False
         layout.prop(context.scene.photonsplat, "threads")
+        layout.prop(context.scene.photonsplat, "memory_budget")
 
 
 class RENDER_PT_photonsplat_viewport(PhotonSplatPanel, Panel):

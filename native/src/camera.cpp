@@ -10,6 +10,7 @@
 #include <glm/matrix.hpp>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
@@ -38,6 +39,9 @@ Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width
     // Remove any scale: Cycles does the same with the camera object's matrix.
     for (int c = 0; c < 3; ++c) to_world_[c] = glm::vec4(glm::normalize(glm::vec3(to_world_[c])), 0.0f);
     to_world_[3].w = 1.0f;
+    if (!within_world(glm::vec3(to_world_[3])) || !is_finite(glm::vec3(to_world_[0])) ||
+        !is_finite(glm::vec3(to_world_[1])) || !is_finite(glm::vec3(to_world_[2])))
+        throw InvalidInput("camera.to_world", "position must be finite and within ±1e15, axes finite and non-zero");
     inverse_projection_ = glm::inverse(projection);
     forward_ = -glm::vec3(to_world_[2]);
 

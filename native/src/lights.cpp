@@ -57,10 +57,11 @@ float Light::spot_attenuation(const glm::vec3& outgoing) const {
 
 void validate(const Light& light, const std::string& where) {
     require_nonnegative_rgb(light.value, where + ".value");
-    if (!is_finite(light.position)) throw InvalidInput(where + ".position", "must be finite");
+    if (!within_world(light.position))
+        throw InvalidInput(where + ".position", "must be finite and within ±1e15 on every axis");
     switch (light.kind) {
         case LightKind::point:
-            if (!(std::isfinite(light.radius) && light.radius >= 0.0f))
+            if (!(std::isfinite(light.radius) && light.radius >= 0.0f && light.radius <= kMaxCoordinate))
                 throw InvalidInput(where + ".radius", "must be finite and >= 0, got " + std::to_string(light.radius));
             break;
         case LightKind::sun:
@@ -80,8 +81,8 @@ void validate(const Light& light, const std::string& where) {
                 throw InvalidInput(where + ".spot_blend", "must be in [0, 1], got " + std::to_string(light.spot_blend));
             break;
         case LightKind::area:
-            if (!is_finite(light.axis_u) || !is_finite(light.axis_v))
-                throw InvalidInput(where + ".axis_u/axis_v", "must be finite");
+            if (!within_world(light.axis_u) || !within_world(light.axis_v))
+                throw InvalidInput(where + ".axis_u/axis_v", "must be finite and within ±1e15");
             if (!(light.area() > 0.0f) || !std::isfinite(light.area()))
                 throw InvalidInput(where + ".axis_u/axis_v", "span no area (zero size or parallel edges)");
             break;

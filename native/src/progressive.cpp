@@ -7,6 +7,7 @@
 #include <string>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/memory_budget.h"
 #include "photonsplat/render_control.h"
 
 namespace ps {
@@ -42,7 +43,7 @@ struct RunningFlag {
 ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, const RenderSettings& settings)
     : scene_(scene), camera_(camera), settings_(settings) {
     validate(settings_);
-    check_memory(camera_, settings_.photons, kSumBytesPerPixel);
+    check_frame_memory(scene_, camera_, settings_, kSumBytesPerPixel);
     pixels_ = static_cast<size_t>(camera_.width()) * camera_.height();
     first_radius_ = first_radius(scene_, settings_);
     last_radius_ = first_radius_;

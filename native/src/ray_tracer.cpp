@@ -1,5 +1,6 @@
 #include "photonsplat/ray_tracer.h"
 
+#include <cmath>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -13,6 +14,16 @@
 namespace ps {
 
 namespace {
+
+// Embree asserts (aborting the process, Blender with it) on a ray with a non-finite or huge origin or direction,
+// or a negative or inverted range. Scene validation keeps such rays from being made; this is the last guard.
+bool embree_accepts(const Ray& ray, float t_min, float t_max) {
+    constexpr float kLarge = 1.8e18f;
+    for (int i = 0; i < 3; ++i)
+        if (!(std::fabs(ray.origin[i]) <= kLarge) || !(std::fabs(ray.direction[i]) <= kLarge)) return false;
+    return t_min >= 0.0f && t_min <= t_max;
+}
+
 
 // One Embree device per process, kept for its lifetime: creating devices per render is slow, and
 // releasing one while another thread still uses it is how native add-ons crash Blender.
@@ -147,6 +158,7 @@ void RayTracer::update_instances(const std::vector<Instance>& instances, const s
 }
 
 bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, uint32_t rays) const {
+    if (!embree_accepts(ray, t_min, t_max)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -175,6 +187,7 @@ bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, ui
 }
 
 bool RayTracer::occluded(const Ray& ray, float t_min, float t_max, uint32_t rays) const {
+    if (!embree_accepts(ray, t_min, t_max)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r;

@@ -1,9 +1,6 @@
 #include "photonsplat/render.h"
 
-#include <unistd.h>
-
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -12,6 +9,7 @@
 #include "photonsplat/direct_light.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
+#include "photonsplat/memory_budget.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
@@ -31,35 +29,7 @@ void require(bool ok, const std::string& field, const std::string& what, T value
     if (!ok) throw InvalidInput(field, what + ", got " + std::to_string(value));
 }
 
-std::string gib(double bytes) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.1f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
-    return text;
-}
-
 }  // namespace
-
-// Refuses, before allocating anything, a frame whose per-pixel buffers or photon records alone would take
-// more than half of this machine's memory: without this a mistyped resolution gets Blender killed by the OOM
-// killer instead of a message. (A settable budget covering every structure is the robustness issue's.)
-void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel) {
-    const double pixels = static_cast<double>(camera.width()) * camera.height();
-    // view sample + per-pixel emission/alpha/flag/first normal+depth + direct + indirect (+ caustics) + RGBA,
-    // the passes, normal and depth
-    const double frame_bytes =
-        pixels * (sizeof(ViewSample) + 12 + 4 + 1 + 16 + 12 + 12 + 12 + 16 + 48 + 16 + extra_bytes_per_pixel);
-    const double photon_bytes = static_cast<double>(photons) * sizeof(Photon);
-    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-    if (!(memory > 0.0)) return;  // unknown: nothing sensible to compare with
-    if (frame_bytes > 0.5 * memory)
-        throw InvalidInput("resolution", std::to_string(camera.width()) + "×" + std::to_string(camera.height()) +
-                                             " needs about " + gib(frame_bytes) + " for the frame's buffers, more than half of this machine's " +
-                                             gib(memory) + "; lower the resolution");
-    if (photon_bytes > 0.5 * memory)
-        throw InvalidInput("photons", std::to_string(photons) + " photons need at least " + gib(photon_bytes) +
-                                          " of photon records, more than half of this machine's " + gib(memory) +
-                                          "; lower the photon count");
-}
 
 void validate(const RenderSettings& s) {
     require(s.photons <= kMaxPhotons, "photons", "must be at most " + std::to_string(kMaxPhotons), s.photons);
@@ -109,11 +79,13 @@ float first_radius(const Scene& scene, const RenderSettings& settings) {
 RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                          const PassParams& pass, RenderControl& control) {
     validate(settings);
-    check_memory(camera, settings.photons);
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     Stats& stats = result.stats;
+    // Every large structure is predicted before it is allocated: a frame that cannot fit is refused here.
+    MemoryBudget budget(settings.memory_budget, stats);
+    reserve_frame(budget, scene, camera, settings);
     const float radius = pass.radius;
     const uint64_t seed = pass_seed(settings.seed, pass.index);
     stats.values["radius"] = radius;
@@ -146,6 +118,7 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
         direct_settings.seed = seed;
         direct_settings.samples_per_light = settings.direct_samples;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
+        stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
 
         control.begin_stage("photons", 0.35, 0.45);
         PhotonSettings photon_settings;
@@ -183,6 +156,10 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
                         return splat_tiled(samples, camera, map, params, control, stats);
                     return splat_gather(samples, map, params, control, stats);
                 };
+                params.max_pairs_in_memory = fit_pair_cap(
+                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
+                                                                  photons.photons.size(), nullptr, camera,
+                                                                  settings.kernel, arena.max_concurrency()));
                 control.begin_stage(splat_stage, 0.45, splat_end);
                 StageTimer t(stats, "splat");
                 indirect = splat(photons);
@@ -222,6 +199,10 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
                         return splat_cluster_cone(hierarchy, samples, map, params, control, stats);
                     return splat_directional(hierarchy, samples, map, params, control, stats);
                 };
+                params.max_pairs_in_memory = fit_pair_cap(
+                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
+                                                                  photons.photons.size(), &hierarchy, camera,
+                                                                  settings.kernel, arena.max_concurrency()));
                 control.begin_stage(splat_stage, 0.5, splat_end);
                 StageTimer t(stats, "splat");
                 indirect = splat(photons);
@@ -233,6 +214,7 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
             }
         }
         control.check();
+        stats.bytes["indirect_light"] = static_cast<double>(indirect.capacity() * sizeof(glm::vec3));
 
         control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");
@@ -269,6 +251,13 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
                 result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
             result.rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
         }
+        // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
+        // float's range: say so rather than hand back a frame with infinities in it.
+        size_t overflowed = 0;
+        for (float v : result.rgba) overflowed += std::isfinite(v) ? 0 : 1;
+        if (overflowed > 0)
+            throw InvalidInput("scene", std::to_string(overflowed) + " pixel values overflowed the float range; lower "
+                                        "light strengths, emission or the background, or the scene's size");
         stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size() + result.caustics.size() +
                                                     result.normal.size() + result.depth.size()) * sizeof(float));
     });

@@ -30,6 +30,8 @@ bool all_finite(const glm::mat4& m) {
 
 void require_finite_transform(const glm::mat4& m, const std::string& field) {
     if (!all_finite(m)) throw InvalidInput(field, "contains NaN or infinity");
+    if (!within_world(glm::vec3(m[3])))
+        throw InvalidInput(field, "places the object beyond ±1e15, where rays cannot be traced");
     // Only affine transforms place a mesh (Blender's world matrices always are).
     if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
         throw InvalidInput(field, "must be affine (last row 0, 0, 0, 1)");
@@ -146,8 +148,9 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         const glm::vec3 &v0 = data.positions[i0], &v1 = data.positions[i1], &v2 = data.positions[i2];
         const glm::vec3 ng_raw = glm::cross(v1 - v0, v2 - v0);
         const float len = glm::length(ng_raw);
-        // Zero-area (or overflowing) triangles can neither be hit nor shaded.
-        if (!(len > 0.0f) || !std::isfinite(len)) {
+        // Zero-area (or overflowing, or beyond kMaxCoordinate: Embree would assert) triangles can neither be hit
+        // nor shaded.
+        if (!(len > 0.0f) || !std::isfinite(len) || !within_world(v0) || !within_world(v1) || !within_world(v2)) {
             ++dropped_in_meshes_;
             continue;
         }

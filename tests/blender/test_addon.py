@@ -97,7 +97,7 @@ def draw(panel_class, **context):
 def test_panels_draw(caustics_scene):
     settings_panel = draw(ui.RENDER_PT_photonsplat, scene=caustics_scene)
     assert {"photons", "radius", "method", "max_bounces", "seed"} <= set(settings_panel.props)
-    assert draw(ui.RENDER_PT_photonsplat_performance, scene=caustics_scene).props == ["threads"]
+    assert draw(ui.RENDER_PT_photonsplat_performance, scene=caustics_scene).props == ["threads", "memory_budget"]
     glass = draw(ui.MATERIAL_PT_photonsplat_surface, material=bpy.data.materials["Glass"])
     assert any("glass" in text for text in glass.labels)
     draw(ui.WORLD_PT_photonsplat_surface, world=caustics_scene.world)

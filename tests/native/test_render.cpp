@@ -94,6 +94,8 @@ TEST(Render, CancelStopsTheRenderWithCancelled) {
     test::build_cornell_box(scene, true);
     RenderSettings settings;
     settings.photons = 50'000'000;  // far more than the test waits for
+    // The whole trace would need ~30 GiB by the budget's prediction; cancelled at 200 ms it allocates a fraction.
+    settings.memory_budget = uint64_t(64) << 30;
     settings.method = SplatMethod::brute;
     RenderControl control;
     std::thread canceller([&] {

@@ -94,7 +94,7 @@ inline glm::mat4 perspective(float fov_y_degrees, float aspect, float near, floa
 }
 
 inline Camera look_at(glm::vec3 eye, glm::vec3 target, int width, int height, float fov_y = 40.0f,
-                      glm::vec3 up = {0, 0, 1}) {
+                      glm::vec3 up = {0, 0, 1}, float near = 0.1f) {
     const glm::vec3 forward = glm::normalize(target - eye);
     const glm::vec3 right = glm::normalize(glm::cross(forward, up));
     const glm::vec3 true_up = glm::cross(right, forward);
@@ -103,9 +103,63 @@ inline Camera look_at(glm::vec3 eye, glm::vec3 target, int width, int height, fl
     to_world[1] = glm::vec4(true_up, 0.0f);
     to_world[2] = glm::vec4(-forward, 0.0f);
     to_world[3] = glm::vec4(eye, 1.0f);
-    return Camera(to_world, perspective(fov_y, static_cast<float>(width) / height, 0.1f, 100.0f), width, height);
+    return Camera(to_world, perspective(fov_y, static_cast<float>(width) / height, near, 1000.0f * near), width, height);
 }
 
 inline Camera cornell_camera(int width, int height) { return look_at({0, -3.9f, 1}, {0, 0, 1}, width, height); }
+
+// An axis-aligned closed box [lo, hi] as 12 triangles (faces wound outwards; materials are double-sided).
+inline void add_box(Scene& scene, const char* name, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
+    const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                            {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+    const int q[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+    std::vector<float> v;
+    std::vector<int32_t> t, m;
+    for (const auto& face : q) {
+        const int32_t base = static_cast<int32_t>(v.size() / 3);
+        for (int k = 0; k < 4; ++k) v.insert(v.end(), {c[face[k]].x, c[face[k]].y, c[face[k]].z});
+        t.insert(t.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+        m.insert(m.end(), {static_cast<int32_t>(material), static_cast<int32_t>(material)});
+    }
+    MeshInput mesh;
+    mesh.name = name;
+    mesh.vertices = v.data();
+    mesh.vertex_count = v.size() / 3;
+    mesh.triangles = t.data();
+    mesh.triangle_count = t.size() / 3;
+    mesh.material_ids = m.data();
+    scene.add_mesh(mesh);
+}
+
+inline Light point_light(const char* name, glm::vec3 position, float watts, float radius = 0.0f) {
+    Light light;
+    light.name = name;
+    light.kind = LightKind::point;
+    light.position = position;
+    light.value = glm::vec3(watts / (4.0f * 3.14159265f));  // Blender's point light of `watts`
+    light.radius = radius;
+    return light;
+}
+
+// The Cornell box scaled by `scale` and moved by `offset`, lamp power scaled by scale² so that irradiance (and
+// so the image) does not change; its camera likewise (near clip scaled too).
+inline void build_transformed_cornell_box(Scene& scene, float scale, glm::vec3 offset) {
+    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.75f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t red = scene.add_material({"red", MaterialKind::diffuse, glm::vec3(0.75f, 0.1f, 0.1f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t glass = scene.add_material({"glass", MaterialKind::glass, glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
+    auto P = [&](float x, float y, float z) { return offset + scale * glm::vec3(x, y, z); };
+    add_quad(scene, "floor", P(-1, -1, 0), P(1, -1, 0), P(1, 1, 0), P(-1, 1, 0), white);
+    add_quad(scene, "ceiling", P(-1, -1, 2), P(-1, 1, 2), P(1, 1, 2), P(1, -1, 2), white);
+    add_quad(scene, "back", P(-1, 1, 0), P(1, 1, 0), P(1, 1, 2), P(-1, 1, 2), white);
+    add_quad(scene, "left", P(-1, -1, 0), P(-1, 1, 0), P(-1, 1, 2), P(-1, -1, 2), red);
+    add_quad(scene, "right", P(1, -1, 0), P(1, -1, 2), P(1, 1, 2), P(1, 1, 0), white);
+    add_box(scene, "glass_block", P(-0.5f, -0.2f, 0.0f), P(0.0f, 0.3f, 0.6f), glass);
+    scene.add_light(point_light("lamp", P(0.0f, 0.0f, 1.8f), 100.0f * scale * scale));
+}
+
+inline Camera transformed_cornell_camera(float scale, glm::vec3 offset, int width, int height) {
+    return look_at(offset + scale * glm::vec3(0, -3.9f, 1), offset + scale * glm::vec3(0, 0, 1), width, height, 40.0f,
+                   {0, 0, 1}, 0.1f * scale);
+}
 
 }  // namespace ps::test

@@ -96,6 +96,6 @@ def render_settings(core, props, **overrides):
                   max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
                   direct_samples=props.direct_samples, kernel=props.kernel,
                   directional_level=props.directional_level, passes=props.passes,
-                  time_limit=props.time_limit)
+                  time_limit=props.time_limit, memory_budget=int(props.memory_budget * 2**30))
     fields.update(overrides)
     return core.RenderSettings(**fields)

@@ -24,6 +24,7 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
+    uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
     bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)
     bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
@@ -76,8 +77,6 @@ RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderS
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                     RenderControl& control);
 
-// Refuses, before anything is allocated, a frame whose buffers would not fit in memory (InvalidInput naming
-// "resolution" or "photons"); `extra_bytes_per_pixel` counts what a caller keeps beside one pass's buffers.
-void check_memory(const Camera& camera, uint64_t photons, double extra_bytes_per_pixel = 0.0);
+// (The memory check of a frame is memory_budget.h's check_frame_memory.)
 
 }  // namespace ps

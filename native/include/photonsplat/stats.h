@@ -13,6 +13,7 @@ struct Stats {
     std::map<std::string, double> counters;    // e.g. "photon_sample_tests", "contributing_pairs"
     std::map<std::string, double> bytes;       // structure name → bytes held
     std::map<std::string, double> values;      // derived settings actually used, e.g. "radius"
+    std::map<std::string, double> predicted_bytes;  // structure name → bytes predicted before allocating it
 
     void merge(const Stats& other);
 };

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# The sanitizer and fuzzing part of the README test command (scripts/test.sh runs it):
+#   1. AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan, gcc) of the core and the WHOLE native suite;
+#   2. ThreadSanitizer build (build-tsan, gcc) running the cross-thread control tests (see below why not more);
+#   3. a clang libFuzzer build (build-fuzz) of fuzz/fuzz_render.cpp, run for PHOTONSPLAT_FUZZ_SECONDS (60) from
+#      the checked-in corpus fuzz/corpus (new inputs go to a scratch directory; see docs/robustness.md).
+# (One clang tree for the suite and the fuzzer would save a build, but one existing test,
+# SplatClusterCone.LongLeafListsWithAccepts, fails its precondition when built with clang: see the report.)
+# PHOTONSPLAT_SANITIZE_STEPS="asan tsan fuzz" selects steps. The Python module is not built in these trees.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+steps="${PHOTONSPLAT_SANITIZE_STEPS-asan tsan fuzz}"
+fuzz_seconds="${PHOTONSPLAT_FUZZ_SECONDS:-60}"
+jobs="$(nproc)"
+status=0
+
+configure() {  # build dir, targets (space-separated), then extra cmake arguments
+  local dir="$1" target="$2"; shift 2
+  # Minimal debug info (line tables) is all a sanitizer report needs: full debug info only slows the build.
+  cmake -S "$root" -B "$root/$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS="-g1" \
+    -DPHOTONSPLAT_BUILD_PYTHON=OFF "$@" >/dev/null
+  cmake --build "$root/$dir" --parallel "$jobs" --target $target
+}
+
+# ThreadSanitizer cannot see the synchronisation inside Debian's libtbb.so (not instrumented): every parallel_for
+# hand-off (data written before the spawn, read by a worker) is reported. Tried: a suppression file grew to six TBB
+# entries and then had to match our own loop bodies, which would hide real races too. So TSan runs the tests in
+# which threads meet through code it sees: the render on one TBB thread, its caller on a std::thread reading
+# progress and cancelling (tests/native/test_control_threads.cpp); scripts/tsan.supp needs no entry for them.
+
+for step in $steps; do
+  case "$step" in
+    asan)
+      echo "== AddressSanitizer + UndefinedBehaviorSanitizer: the whole native suite (build-asan)"
+      configure build-asan photonsplat_tests -DPHOTONSPLAT_SANITIZE="address;undefined"
+      ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
+      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        "$root/build-asan/photonsplat_tests" --gtest_brief=1 || status=1
+      ;;
+    tsan)
+      echo "== ThreadSanitizer: render and caller on different threads (build-tsan)"
+      configure build-tsan photonsplat_thread_tests -DPHOTONSPLAT_SANITIZE=thread
+      TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/scripts/tsan.supp" \
+        "$root/build-tsan/photonsplat_thread_tests" --gtest_brief=1 || status=1
+      ;;
+    fuzz)
+      echo "== libFuzzer: fuzz/fuzz_render.cpp for ${fuzz_seconds} s (build-fuzz, clang)"
+      configure build-fuzz photonsplat_fuzz -DCMAKE_CXX_COMPILER=clang++-14 -DPHOTONSPLAT_BUILD_TESTS=OFF \
+        -DPHOTONSPLAT_BUILD_FUZZER=ON -DPHOTONSPLAT_SANITIZE="address;undefined;fuzzer-no-link"
+      scratch="$(mktemp -d)"
+      ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        "$root/build-fuzz/photonsplat_fuzz" "$scratch" "$root/fuzz/corpus" -max_total_time="$fuzz_seconds" \
+        -max_len=4096 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$scratch/" \
+        2>&1 | grep -E "^(#[0-9]+[[:space:]]+(INITED|DONE)|stat::|==[0-9]+==|SUMMARY|Done)" || true
+      if ls "$scratch"/crash-* "$scratch"/timeout-* "$scratch"/oom-* >/dev/null 2>&1; then
+        echo "fuzzing found failing inputs (kept in $scratch)"; status=1
+      else
+        rm -rf "$scratch"
+      fi
+      ;;
+  esac
+done
+exit $status
