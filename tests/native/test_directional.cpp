@@ -340,7 +340,7 @@ TEST(Directional, SameBitsForAnyThreadCount) {
 
 // Flat cut nodes are described from the leaves' summaries (ClusterBuildOptions::leaf_summaries) instead of their
 // samples. The facet is the same (centroid, axis, sample count) and its bounds only wider, so the image barely
-// moves; nodes across corners still take the per-sample description.
+// moves; nodes across a crease split by whole leaves, unless a leaf itself lies across it.
 TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
     std::mt19937 rng(41);
     ClusterBuildOptions with_summaries;
@@ -364,6 +364,12 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
             if (sample.pixel % 100 >= 50) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.6f, 0.0f, 0.8f);
         PhotonMap lit = uniform_plane_photons(crease, 20000, 3.0f, 0.5f, rng);
         cases.push_back({"crease", std::move(crease), std::move(lit)});
+        // A sharper crease (53°: 27° from the mean, past kSplitAngle) on a tile boundary (x = 48 of 96): every leaf is flat, nodes across it split by leaves.
+        ViewSamples aligned = plane_view(96, 64, 3.0f);
+        for (ViewSample& sample : aligned.samples)
+            if (sample.pixel % 96 >= 48) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.8f, 0.0f, 0.6f);
+        PhotonMap aligned_lit = uniform_plane_photons(aligned, 20000, 3.0f, 0.5f, rng);
+        cases.push_back({"tile-aligned crease", std::move(aligned), std::move(aligned_lit)});
     }
     for (const Case& c : cases) {
         const ClusterHierarchy plain = build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height));
@@ -376,11 +382,18 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
             Stats plain_stats, summarised_stats;
             const std::vector<glm::vec3> a = directional(c.vs, plain, c.map, params, plain_stats);
             const std::vector<glm::vec3> b = directional(c.vs, summarised, c.map, params, summarised_stats);
-            const double flat = summarised_stats.counters.at("directional_flat_cut_nodes");
+            const double flat = summarised_stats.counters.at("directional_summarised_cut_nodes");
             const double cut = summarised_stats.counters.at("directional_cut_nodes");
-            EXPECT_EQ(plain_stats.counters.at("directional_flat_cut_nodes"), 0.0);
+            EXPECT_EQ(plain_stats.counters.at("directional_summarised_cut_nodes"), 0.0);
             EXPECT_GT(flat, 0.0) << c.name << " level " << level;
             if (std::string(c.name) == "crease") EXPECT_LT(flat, cut) << "level " << level;
+            if (std::string(c.name) == "tile-aligned crease") {
+                EXPECT_EQ(flat, cut) << "level " << level;
+                if (level == 2)  // nodes of 4×4 tiles (x tiles 4–7) hold both sides: split
+                    EXPECT_GT(summarised_stats.counters.at("directional_facets"), cut);
+                EXPECT_EQ(summarised_stats.counters.at("directional_facets"),
+                          plain_stats.counters.at("directional_facets")) << "level " << level;
+            }
             EXPECT_EQ(plain_stats.counters.at("directional_cut_nodes"), cut);
             const double sum_ratio = luminance_sum(b) / luminance_sum(a);
             const double difference = mean_relative_difference(b, a);

@@ -15,10 +15,10 @@
 //    one facet. A facet has its sample centroid, its normal cone, and its own bins: without the split, a corner
 //    node's centroid floats off both walls and its bins mix the photons of both, which the exact method keeps
 //    apart with its n_x·n_p test. A sample belongs to the facet whose axis is closest to its normal.
-//    A node whose leaves' summaries (built with the hierarchy, ClusterBuildOptions::leaf_summaries) bound its
-//    normals within kSplitAngle is one facet described from those summaries, with bounds that contain every
-//    sample; only the other nodes (corners, curves) read their samples again. That pass, through sample_order
-//    to samples scattered over the frame, cost as much as shading all of them.
+//    Nodes are described from their leaves' summaries (built with the hierarchy,
+//    ClusterBuildOptions::leaf_summaries), with bounds that contain every sample, and split by whole leaves;
+//    only nodes with a leaf across a crease (or normals the summaries cannot bound) read their samples again.
+//    That pass, through sample_order to samples scattered over the frame, cost as much as shading all of them.
 // 3. Traverse. Each photon walks down to the cut only, rejecting nodes above it by sphere-vs-box as `cluster`
 //    does. At a cut node it is deposited into each facet whose centroid is within r, with weight
 //    w = kernel_weight(centroid − p), unless the facet's normal cone shows that none of its samples could accept
@@ -59,7 +59,7 @@
 // deposits into a facet's bin), "photon_sample_tests" = 0 (no photon is ever tested against a sample),
 // "bin_evaluations" (bins shaded, own and parent's, summed over samples), "contributing_pairs" = Σ over deposits
 // of the facet's sample count (the photon–sample pairs the deposits hand flux to, whether or not a sample's
-// facing test then takes that bin), "directional_cut_nodes", "directional_flat_cut_nodes" (described from leaf
+// facing test then takes that bin), "directional_cut_nodes", "directional_summarised_cut_nodes" (described from leaf
 // summaries), "directional_facets". Values: "directional_level"
 // (the level used; -1 when the exact splat was used), "directional_exact_fallback" (1 then).
 // Bytes: "direction_bins" (8 bins × 6 int64 per facet), "directional_nodes" (facets, cut and tree bookkeeping).
@@ -353,30 +353,27 @@ uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<
     return 1;
 }
 
-// A cut node of flat leaves as one facet, from the leaves' summaries (hierarchy.leaf_summaries[first, last))
-// instead of its samples: the bounds hold every sample (cone, slab and reach are widened by each leaf's own), so
-// the rejection tests stay conservative. Returns false when the summaries cannot show the node to be one facet
-// (a leaf with unbounded normals, normals that cancel, or a spread near kSplitAngle: a corner or a curve); the
-// node is then described from its samples.
-bool describe_flat_node(const ClusterHierarchy& hierarchy, size_t first, size_t last, const SplatParams& params,
-                        Facet& out) {
-    glm::dvec3 position_sum(0.0), normal_sum(0.0);
+// One facet from the leaves' summaries (hierarchy.leaf_summaries[first, last)) around `axis`: its count and
+// centroid from the leaves `owned` gives, its bounds (cone, slab, reach) from those `bounded` gives, which must
+// include every leaf that may hold a sample shaded from this facet. Widened by each leaf's own bounds, so the
+// rejection tests stay conservative. Returns false when no owned leaf has a sample.
+template <typename Owned, typename Bounded>
+bool facet_from_leaves(const ClusterHierarchy& hierarchy, size_t first, size_t last, const glm::dvec3& axis,
+                       const SplatParams& params, Owned owned, Bounded bounded, Facet& out) {
+    glm::dvec3 position_sum(0.0);
     double count = 0.0;
     for (size_t l = first; l != last; ++l) {
         const LeafSummary& leaf = hierarchy.leaf_summaries[l];
-        if (leaf.count == 0) continue;
-        if (!(leaf.cone_angle < kPi)) return false;
+        if (leaf.count == 0 || !owned(l)) continue;
         position_sum += glm::dvec3(leaf.centroid) * double(leaf.count);
-        normal_sum += glm::dvec3(leaf.normal_sum);
         count += leaf.count;
     }
-    const double length = glm::length(normal_sum);
-    if (count == 0.0 || !(length > 1e-3 * count)) return false;
-    const glm::dvec3 axis = normal_sum / length, centroid = position_sum / count;
+    if (count == 0.0) return false;
+    const glm::dvec3 centroid = position_sum / count;
     double spread = 0.0, slab = 0.0, reach = 0.0;
     for (size_t l = first; l != last; ++l) {
         const LeafSummary& leaf = hierarchy.leaf_summaries[l];
-        if (leaf.count == 0) continue;
+        if (leaf.count == 0 || !bounded(l)) continue;
         const glm::dvec3 leaf_axis = glm::normalize(glm::dvec3(leaf.normal_sum));
         spread = std::max(spread, std::acos(std::clamp(glm::dot(axis, leaf_axis), -1.0, 1.0)) + leaf.cone_angle);
         // |a·(x − c)| <= |a·(c_l − c)| + |a_l·(x − c_l)| + |a − a_l|·|x − c_l|
@@ -385,17 +382,85 @@ bool describe_flat_node(const ClusterHierarchy& hierarchy, size_t first, size_t 
                                   glm::length(axis - leaf_axis) * double(leaf.radius));
         reach = std::max(reach, glm::length(offset) + double(leaf.radius));
     }
-    // The per-sample description splits a node whose normals spread wider than kSplitAngle; with bounds, split
-    // (from the samples) whenever the bound does not rule that out.
-    if (!(spread < kSplitAngle)) return false;
     out = Facet();
     out.axis = glm::vec3(axis);
     out.centroid = glm::vec3(centroid);
     out.samples = uint32_t(count);
     out.reach = float(reach);
     frame_around(out.axis, out.tangent, out.bitangent);
-    set_rejects(out, float(spread) + kConeInflation, slab, params);
+    set_rejects(out, float(std::min(spread, double(kPi))) + kConeInflation, slab, params);
     return true;
+}
+
+// A cut node's facets from its leaves' summaries instead of its samples: one facet when the leaves bound the
+// normals within kSplitAngle; else two, split as describe_cut_node splits samples (seeds, one k-means step) but
+// with whole leaves, provided every leaf is narrow (a leaf across a crease needs its samples). A sample is shaded
+// from the facet whose axis is closest to ITS normal, which may not be its leaf's: each facet's bounds therefore
+// take every leaf whose cone reaches into that facet's side. Returns the facet count, or 0 when the node must be
+// described from its samples (unbounded or cancelling normals, a wide leaf, a failed split).
+uint32_t describe_node_from_leaves(const ClusterHierarchy& hierarchy, size_t first, size_t last,
+                                   const SplatParams& params, Facet* out) {
+    glm::dvec3 normal_sum(0.0);
+    double count = 0.0;
+    bool narrow = true;
+    for (size_t l = first; l != last; ++l) {
+        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
+        if (leaf.count == 0) continue;
+        if (!(leaf.cone_angle < kPi)) return 0;
+        narrow = narrow && leaf.cone_angle < 0.5f * kSplitAngle;
+        normal_sum += glm::dvec3(leaf.normal_sum);
+        count += leaf.count;
+    }
+    const double length = glm::length(normal_sum);
+    if (count == 0.0 || !(length > 1e-3 * count)) return 0;
+    const glm::dvec3 mean = normal_sum / length;
+    const auto axis_of = [&](size_t l) { return glm::normalize(glm::dvec3(hierarchy.leaf_summaries[l].normal_sum)); };
+    double spread = 0.0;
+    glm::dvec3 seed0 = mean;
+    double lowest = 2.0;
+    for (size_t l = first; l != last; ++l) {
+        if (hierarchy.leaf_summaries[l].count == 0) continue;
+        const glm::dvec3 a = axis_of(l);
+        spread = std::max(spread, std::acos(std::clamp(glm::dot(mean, a), -1.0, 1.0)) +
+                                      hierarchy.leaf_summaries[l].cone_angle);
+        if (glm::dot(mean, a) < lowest) lowest = glm::dot(mean, a), seed0 = a;
+    }
+    const auto all = [](size_t) { return true; };
+    if (spread < kSplitAngle) return facet_from_leaves(hierarchy, first, last, mean, params, all, all, out[0]) ? 1 : 0;
+    if (!narrow) return 0;
+    glm::dvec3 seed1 = seed0;
+    lowest = 2.0;
+    for (size_t l = first; l != last; ++l) {
+        if (hierarchy.leaf_summaries[l].count == 0) continue;
+        const glm::dvec3 a = axis_of(l);
+        if (glm::dot(seed0, a) < lowest) lowest = glm::dot(seed0, a), seed1 = a;
+    }
+    glm::dvec3 sums[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+    for (size_t l = first; l != last; ++l) {
+        if (hierarchy.leaf_summaries[l].count == 0) continue;
+        const glm::dvec3 a = axis_of(l);
+        sums[glm::dot(a, seed1) > glm::dot(a, seed0) ? 1 : 0] += glm::dvec3(hierarchy.leaf_summaries[l].normal_sum);
+    }
+    const double l0 = glm::length(sums[0]), l1 = glm::length(sums[1]);
+    if (!(l0 > 0.0) || !(l1 > 0.0)) return 0;
+    // The axes as floats, as facet_of will compare them.
+    const glm::dvec3 axes[2] = {glm::dvec3(glm::vec3(sums[0] / l0)), glm::dvec3(glm::vec3(sums[1] / l1))};
+    for (int f = 0; f < 2; ++f) {
+        const glm::dvec3 towards = axes[f] - axes[1 - f];
+        const double separation = glm::length(towards);
+        if (!(separation > 1e-6)) return 0;
+        const glm::dvec3 d = towards / separation;
+        const auto owned = [&](size_t l) {
+            const glm::dvec3 a = axis_of(l);
+            return (glm::dot(a, axes[1]) > glm::dot(a, axes[0]) ? 1 : 0) == f;
+        };
+        // The leaf's cone reaches f's side {n : n·d >= 0} (with a margin for rounding).
+        const auto bounded = [&](size_t l) {
+            return glm::dot(axis_of(l), d) >= -std::sin(double(hierarchy.leaf_summaries[l].cone_angle)) - 1e-4;
+        };
+        if (!facet_from_leaves(hierarchy, first, last, axes[f], params, owned, bounded, out[f])) return 0;
+    }
+    return 2;
 }
 
 int bin_of(const Facet& f, const glm::vec3& wi) {
@@ -520,8 +585,10 @@ private:
                 // over the frame, cost as much as shading them.
                 const size_t first = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_begin) - leaf_begin.begin());
                 const size_t last = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_end) - leaf_begin.begin());
-                if (summaries && describe_flat_node(hierarchy_, first, last, params_, pairs[2 * c])) {
-                    cuts_[c].facet_count = 1;
+                const uint32_t from_leaves =
+                    summaries ? describe_node_from_leaves(hierarchy_, first, last, params_, &pairs[2 * c]) : 0;
+                if (from_leaves > 0) {
+                    cuts_[c].facet_count = from_leaves;
                     ++described;
                 } else {
                     cuts_[c].facet_count = describe_cut_node(hierarchy_, views_, node, params_, points, &pairs[2 * c]);
@@ -531,7 +598,7 @@ private:
             }
             from_summaries += described;
         });
-        stats_.counters["directional_flat_cut_nodes"] += double(from_summaries.load());
+        stats_.counters["directional_summarised_cut_nodes"] += double(from_summaries.load());
         facets_.reserve(cuts_.size() + cuts_.size() / 8);
         for (size_t c = 0; c < cuts_.size(); ++c) {
             Cut& cut = cuts_[c];
@@ -602,7 +669,8 @@ private:
                 keyed[j] = {key, uint32_t(j)};
             }
         });
-        std::sort(keyed.begin(), keyed.end());
+        // The render's photon map already comes in this order (photons.cpp): then there is nothing to sort.
+        if (!std::is_sorted(keyed.begin(), keyed.end())) std::sort(keyed.begin(), keyed.end());
         std::vector<uint32_t> order(keyed.size());
         for (size_t j = 0; j < keyed.size(); ++j) order[j] = keyed[j].second;
         return order;
@@ -888,7 +956,7 @@ std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, cons
     validate(hierarchy, samples, photons);
     control.check();
     for (const char* name : {"photon_node_tests", "node_deposits", "photon_sample_tests", "contributing_pairs",
-                             "bin_evaluations", "directional_cut_nodes", "directional_flat_cut_nodes", "directional_facets"})
+                             "bin_evaluations", "directional_cut_nodes", "directional_summarised_cut_nodes", "directional_facets"})
         stats.counters[name] += 0.0;  // present even when there is nothing to splat
     stats.bytes["direction_bins"] = 0.0;
     stats.values["directional_exact_fallback"] = 0.0;
