@@ -22,6 +22,8 @@
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
 
+#include "building_blocks.h"
+
 namespace ps {
 
 namespace {
@@ -149,28 +151,14 @@ EmissionGuide learn_guide(const Scene& scene, const LightSources& sources, size_
 // cells, which keeps those in cache (the cluster traversal at 1M photons was bound by cache misses with photons
 // in emission order, which is random in space). Deterministic: it depends on the photons only.
 void order_photons_spatially(std::vector<Photon>& photons) {
-    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    Box box;
     for (const Photon& p : photons)
-        if (std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z))
-            lo = glm::min(lo, p.position), hi = glm::max(hi, p.position);
-    const glm::dvec3 scale = glm::dvec3(1023.0) / glm::max(glm::dvec3(hi) - glm::dvec3(lo), glm::dvec3(1e-30));
-    const auto spread = [](uint32_t v) {  // bit i of a 10-bit value to bit 3i
-        v &= 1023u;
-        v = (v | v << 16) & 0x030000FFu;
-        v = (v | v << 8) & 0x0300F00Fu;
-        v = (v | v << 4) & 0x030C30C3u;
-        v = (v | v << 2) & 0x09249249u;
-        return v;
-    };
+        if (std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z)) box.add(p.position);
+    const MortonGrid grid(box);
     std::vector<std::pair<uint32_t, uint32_t>> keyed(photons.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, keyed.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t j = r.begin(); j != r.end(); ++j) {
-            const glm::vec3& p = photons[j].position;
-            uint32_t key = 0;
-            if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
-                const glm::dvec3 q = glm::clamp((glm::dvec3(p) - glm::dvec3(lo)) * scale, 0.0, 1023.0);
-                key = spread(uint32_t(q.x)) | spread(uint32_t(q.y)) << 1 | spread(uint32_t(q.z)) << 2;
-            }
+            const uint32_t key = grid.key(photons[j].position);
             keyed[j] = {key, uint32_t(j)};
         }
     });

@@ -702,7 +702,6 @@ bool prepare(const char* method, const ClusterHierarchy& hierarchy, const ViewSa
              const PhotonMap& photons, const SplatParams& params, const RenderControl& control, Stats& stats,
              bool cones) {
     validate(params, photons);
-    const std::vector<ViewSample>& views = samples.samples;
     validate(hierarchy, samples, photons);
     if (cones && !hierarchy.empty() && !hierarchy.has_cones())
         throw InvalidInput("cluster hierarchy", std::string("built without normal cones, which the ") + method +

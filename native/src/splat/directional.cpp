@@ -87,6 +87,8 @@
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
 
+#include "../building_blocks.h"
+
 namespace ps {
 namespace {
 
@@ -646,26 +648,14 @@ private:
 
     // Photon indices in Morton order of position (10 bits an axis over the photons' box), ties by index.
     std::vector<uint32_t> spatial_order() const {
-        glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+        Box box;
         for (const glm::vec3& p : positions_)
-            if (is_finite(p)) lo = glm::min(lo, p), hi = glm::max(hi, p);
-        const glm::dvec3 scale = glm::dvec3(1023.0) / glm::max(glm::dvec3(hi) - glm::dvec3(lo), glm::dvec3(1e-30));
-        const auto spread = [](uint32_t v) {  // bit i of a 10-bit value to bit 3i
-            v &= 1023u;
-            v = (v | v << 16) & 0x030000FFu;
-            v = (v | v << 8) & 0x0300F00Fu;
-            v = (v | v << 4) & 0x030C30C3u;
-            v = (v | v << 2) & 0x09249249u;
-            return v;
-        };
+            if (is_finite(p)) box.add(p);
+        const MortonGrid grid(box);
         std::vector<std::pair<uint32_t, uint32_t>> keyed(positions_.size());
         tbb::parallel_for(tbb::blocked_range<size_t>(0, keyed.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t j = r.begin(); j != r.end(); ++j) {
-                uint32_t key = 0;
-                if (is_finite(positions_[j])) {
-                    const glm::dvec3 q = glm::min((glm::dvec3(positions_[j]) - glm::dvec3(lo)) * scale, 1023.0);
-                    key = spread(uint32_t(q.x)) | spread(uint32_t(q.y)) << 1 | spread(uint32_t(q.z)) << 2;
-                }
+                const uint32_t key = grid.key(positions_[j]);
                 keyed[j] = {key, uint32_t(j)};
             }
         });
