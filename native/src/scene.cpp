@@ -256,8 +256,10 @@ WorldTriangle Scene::world_triangle(uint32_t instance, uint32_t triangle) const 
     return {corner(0), corner(1), corner(2)};
 }
 
-glm::vec3 Scene::bounds_min() const {
-    glm::vec3 lo(std::numeric_limits<float>::infinity());
+// The world-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
+// when nothing is placed.
+std::pair<glm::vec3, glm::vec3> Scene::world_bounds() const {
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (const Instance& instance : instances_) {
         const MeshData& mesh = meshes_[instance.mesh];
         if (instance_is_flat(instance) || mesh.triangle_count() == 0) continue;
@@ -265,24 +267,21 @@ glm::vec3 Scene::bounds_min() const {
             const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
                               (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
                               (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
-            lo = glm::min(lo, glm::vec3(instance.to_world * glm::vec4(p, 1.0f)));
+            const glm::vec3 w(instance.to_world * glm::vec4(p, 1.0f));
+            lo = glm::min(lo, w);
+            hi = glm::max(hi, w);
         }
     }
+    return {lo, hi};
+}
+
+glm::vec3 Scene::bounds_min() const {
+    const glm::vec3 lo = world_bounds().first;
     return std::isfinite(lo.x) ? lo : glm::vec3(-0.5f);
 }
 
 glm::vec3 Scene::bounds_max() const {
-    glm::vec3 hi(-std::numeric_limits<float>::infinity());
-    for (const Instance& instance : instances_) {
-        const MeshData& mesh = meshes_[instance.mesh];
-        if (instance_is_flat(instance) || mesh.triangle_count() == 0) continue;
-        for (int corner = 0; corner < 8; ++corner) {
-            const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
-                              (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
-                              (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
-            hi = glm::max(hi, glm::vec3(instance.to_world * glm::vec4(p, 1.0f)));
-        }
-    }
+    const glm::vec3 hi = world_bounds().second;
     return std::isfinite(hi.x) ? hi : glm::vec3(0.5f);
 }
 

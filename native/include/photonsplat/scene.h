@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/mat3x3.hpp>
@@ -129,6 +130,7 @@ private:
     mutable std::vector<uint32_t> moved_instances_;
 
     bool instance_is_flat(const Instance& instance) const;
+    std::pair<glm::vec3, glm::vec3> world_bounds() const;  // bounds_min/max before their empty-scene fallback
 };
 
 }  // namespace ps
