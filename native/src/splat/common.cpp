@@ -3,6 +3,9 @@
 #include <limits>
 #include <string>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/splat.h"
@@ -79,7 +82,9 @@ void validate(const ClusterHierarchy& hierarchy, const ViewSamples& samples, con
 // A float subtraction is already the exactly rounded difference, so doing it in double would not help.
 std::vector<glm::vec3> relative_photon_positions(const PhotonMap& photons, const glm::vec3& origin) {
     std::vector<glm::vec3> relative(photons.photons.size());
-    for (size_t i = 0; i < relative.size(); ++i) relative[i] = photons.photons[i].position - origin;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, relative.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) relative[i] = photons.photons[i].position - origin;
+    });
     return relative;
 }
 
