@@ -100,7 +100,7 @@ void bind_translation(py::module_& m) {
             "add_instance",
             [](ps::Scene& s, uint32_t mesh, const py::object& transform, const std::string& name, bool camera,
                bool shadow, bool indirect) {
-                return s.add_instance(mesh, mat4(transform, "instance '" + name + "'.transform"), name,
+                return s.add_instance(mesh, dmat4(transform, "instance '" + name + "'.transform"), name,
                                       visibility_bits(camera, shadow, indirect));
             },
             "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
@@ -110,7 +110,7 @@ void bind_translation(py::module_& m) {
         .def(
             "set_instance_transform",
             [](ps::Scene& s, uint32_t instance, const py::object& transform) {
-                s.set_instance_transform(instance, mat4(transform, "instance.transform"));
+                s.set_instance_transform(instance, dmat4(transform, "instance.transform"));
             },
             "instance_id"_a, "transform"_a,
             "Moves an instance. Meshes and their BVHs are kept; the next render refits the top-level BVH over the "
@@ -122,7 +122,7 @@ void bind_translation(py::module_& m) {
                const py::object& uvs) {
                 MeshArrays arrays;
                 ps::MeshInput mesh = mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays);
-                if (!transform.is_none()) mesh.transform = mat4(transform, "mesh '" + name + "'.transform");
+                if (!transform.is_none()) mesh.transform = dmat4(transform, "mesh '" + name + "'.transform");
                 s.add_mesh(mesh);
             },
             "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(), "material_ids"_a = py::none(),
@@ -155,13 +155,13 @@ void bind_translation(py::module_& m) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::spot;
-                l.position = vec3(position, "spot light '" + name + "'.position");
+                const glm::dvec3 p = dvec3(position, "spot light '" + name + "'.position");
                 l.direction = vec3(direction, "spot light '" + name + "'.direction");
                 l.value = vec3(intensity, "spot light '" + name + "'.intensity");
                 l.spot_size = spot_size;
                 l.spot_blend = spot_blend;
                 l.radius = radius;
-                s.add_light(l);
+                s.add_light(l, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
             "radius"_a = 0.0f,

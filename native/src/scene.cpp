@@ -1,5 +1,6 @@
 #include "photonsplat/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -21,19 +22,24 @@ std::mutex& ray_tracer_mutex() {
     return m;
 }
 
-bool all_finite(const glm::mat4& m) {
+bool all_finite(const glm::dmat4& m) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r)
             if (!std::isfinite(m[c][r])) return false;
     return true;
 }
 
-void require_finite_transform(const glm::mat4& m, const std::string& field) {
+bool within_world(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::fabs(v.x) <= kMaxCoordinate &&
+           std::fabs(v.y) <= kMaxCoordinate && std::fabs(v.z) <= kMaxCoordinate;
+}
+
+void require_finite_transform(const glm::dmat4& m, const std::string& field) {
     if (!all_finite(m)) throw InvalidInput(field, "contains NaN or infinity");
-    if (!within_world(glm::vec3(m[3])))
+    if (!within_world(glm::dvec3(m[3])))
         throw InvalidInput(field, "places the object beyond ±1e15, where rays cannot be traced");
     // Only affine transforms place a mesh (Blender's world matrices always are).
-    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0)
         throw InvalidInput(field, "must be affine (last row 0, 0, 0, 1)");
 }
 
@@ -75,12 +81,23 @@ uint32_t Scene::add_texture(Texture texture) {
     return static_cast<uint32_t>(textures_.size() - 1);
 }
 
-void Scene::add_light(const Light& light) {
-    validate(light, std::string(to_string(light.kind)) + " light '" + light.name + "'");
-    lights_.push_back(light);
+void Scene::add_light(const Light& light) { add_light(light, glm::dvec3(light.position)); }
+
+void Scene::add_light(const Light& light, const glm::dvec3& world_position) {
+    const std::string where = std::string(to_string(light.kind)) + " light '" + light.name + "'";
+    if (!within_world(world_position))
+        throw InvalidInput(where + ".position", "must be finite and within ±1e15 on every axis");
+    Light placed = light;
+    placed.position = glm::vec3(world_position - origin_);
+    validate(placed, where);
+    lights_.push_back(placed);
+    light_positions_.push_back(world_position);
 }
 
-void Scene::clear_lights() { lights_.clear(); }
+void Scene::clear_lights() {
+    lights_.clear();
+    light_positions_.clear();
+}
 
 void Scene::set_background(const glm::vec3& radiance) {
     require_nonnegative_rgb(radiance, "background");
@@ -174,7 +191,51 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
-uint32_t Scene::add_instance(uint32_t mesh, const glm::mat4& to_world, const std::string& name, uint32_t visibility) {
+void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
+    instance.world = to_world;
+    // The translation leaves world space in double, before anything is rounded to float.
+    glm::dmat4 relative = to_world;
+    relative[3] -= glm::dvec4(origin_, 0.0);
+    instance.to_world = glm::mat4(relative);
+    if (!normal_matrix(instance.to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    const MeshData& mesh = meshes_[instance.mesh];
+    const glm::mat3 linear(instance.to_world);
+    instance.rounding_scale = 0.0f;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                          (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                          (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::vec3 q = glm::abs(linear * p);
+        instance.rounding_scale = std::max(instance.rounding_scale, std::max(q.x, std::max(q.y, q.z)));
+    }
+}
+
+// The render origin: the centre of the placed box rounded to a multiple of q, the smallest power of two at
+// least twice the box's largest side. Why this rule:
+//  - a box that holds the world origin gets origin 0 (each |centre| <= side/2 < q/2), so scenes near the origin
+//    render bit for bit as they did before render space existed;
+//  - render coordinates stay within side/2 + q/2 < 2.5 sides of 0: float precision as for the same scene at
+//    the world origin, within two bits;
+//  - the origin moves only when the box grows or shifts by about its size, so adding n instances re-expresses
+//    the scene O(log) times, not n times; and a multiple of a power of two is exact in double.
+// Why the geometry's box and not the camera: it is the camera-independent middle of what rays hit (a camera
+// far from its scene sees it small, where float's rounding at the camera's distance no longer shows), and the
+// scene stays valid for any camera and for renders that share it (the viewport).
+void Scene::recentre() {
+    if (!(placed_min_.x <= placed_max_.x)) return;  // nothing placed yet
+    const glm::dvec3 extent = placed_max_ - placed_min_;
+    const double side = std::max(extent.x, std::max(extent.y, extent.z));
+    if (!(side > 0.0)) return;
+    const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
+    const glm::dvec3 centre = 0.5 * (placed_min_ + placed_max_);
+    const glm::dvec3 origin = q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
+    if (origin == origin_) return;
+    origin_ = origin;
+    for (Instance& instance : instances_) place(instance, instance.world);
+    for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);
+}
+
+uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name, uint32_t visibility) {
     const std::string label = name.empty() ? (mesh < meshes_.size() ? meshes_[mesh].name : std::string("?")) : name;
     const std::string where = "instance '" + label + "'";
     if (mesh >= meshes_.size())
@@ -187,24 +248,34 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::mat4& to_world, const std
     Instance instance;
     instance.mesh = mesh;
     instance.name = label;
-    instance.to_world = to_world;
     instance.visibility = visibility;
-    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    place(instance, to_world);
+    const MeshData& data = meshes_[mesh];
+    if (!instance_is_flat(instance) && data.triangle_count() > 0) {
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::dvec3 p((corner & 1) ? data.bounds_max.x : data.bounds_min.x,
+                               (corner & 2) ? data.bounds_max.y : data.bounds_min.y,
+                               (corner & 4) ? data.bounds_max.z : data.bounds_min.z);
+            const glm::dvec3 w(to_world * glm::dvec4(p, 1.0));
+            placed_min_ = glm::min(placed_min_, w);
+            placed_max_ = glm::max(placed_max_, w);
+        }
+    }
     instances_.push_back(std::move(instance));
+    recentre();
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     ray_tracer_.reset();
     moved_instances_.clear();
     return static_cast<uint32_t>(instances_.size() - 1);
 }
 
-void Scene::set_instance_transform(uint32_t id, const glm::mat4& to_world) {
+void Scene::set_instance_transform(uint32_t id, const glm::dmat4& to_world) {
     if (id >= instances_.size())
         throw InvalidInput("instance", "id " + std::to_string(id) + " out of range (the scene has " +
                                            std::to_string(instances_.size()) + " instances)");
     Instance& instance = instances_[id];
     require_finite_transform(to_world, "instance '" + instance.name + "'.transform");
-    instance.to_world = to_world;
-    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    place(instance, to_world);
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     if (ray_tracer_) moved_instances_.push_back(id);
 }
@@ -256,9 +327,9 @@ WorldTriangle Scene::world_triangle(uint32_t instance, uint32_t triangle) const 
     return {corner(0), corner(1), corner(2)};
 }
 
-// The world-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
+// The render-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
 // when nothing is placed.
-std::pair<glm::vec3, glm::vec3> Scene::world_bounds() const {
+std::pair<glm::vec3, glm::vec3> Scene::render_bounds() const {
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (const Instance& instance : instances_) {
         const MeshData& mesh = meshes_[instance.mesh];
@@ -276,12 +347,12 @@ std::pair<glm::vec3, glm::vec3> Scene::world_bounds() const {
 }
 
 glm::vec3 Scene::bounds_min() const {
-    const glm::vec3 lo = world_bounds().first;
+    const glm::vec3 lo = render_bounds().first;
     return std::isfinite(lo.x) ? lo : glm::vec3(-0.5f);
 }
 
 glm::vec3 Scene::bounds_max() const {
-    const glm::vec3 hi = world_bounds().second;
+    const glm::vec3 hi = render_bounds().second;
     return std::isfinite(hi.x) ? hi : glm::vec3(0.5f);
 }
 
