@@ -229,7 +229,9 @@ void Scene::recentre() {
     const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
     const glm::dvec3 centre = 0.5 * (placed_min_ + placed_max_);
     const glm::dvec3 origin = q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
-    if (origin == origin_) return;
+    // Beyond ±1e15 (geometry scaled up past where coordinates are accepted) the origin stays: render-space
+    // coordinates of accepted positions then stay within ±2e15, far inside float's range.
+    if (origin == origin_ || !within_world(origin)) return;
     origin_ = origin;
     for (Instance& instance : instances_) place(instance, instance.world);
     for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);
