@@ -170,7 +170,8 @@ PYBIND11_MODULE(_core, m) {
         .def_property_readonly("material_count", [](const ps::Scene& s) { return s.materials().size(); })
         .def_property_readonly("light_count", [](const ps::Scene& s) { return s.lights().size(); });
 
-    py::class_<ps::Camera>(m, "Camera", "Camera from a (4,4) camera-to-world matrix and an OpenGL-style projection.")
+    py::class_<ps::Camera>(m, "Camera", "Camera from a (4,4) camera-to-world matrix (read in float64) and an "
+                                        "OpenGL-style projection.")
         .def(py::init([](const py::object& to_world, const py::object& projection, const py::object& width,
                          const py::object& height) {
                  return ps::Camera(dmat4(to_world, "camera.to_world"), mat4(projection, "camera.projection"),

@@ -105,7 +105,8 @@ void bind_translation(py::module_& m) {
             },
             "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
             "visible_indirect"_a = true,
-            "Places mesh mesh_id with a (4,4) row-major object-to-world transform; returns the instance id. "
+            "Places mesh mesh_id with a (4,4) row-major object-to-world transform (read in float64: a scene far "
+            "from the origin keeps its precision); returns the instance id. "
             "visible_*: which rays see it (camera rays, shadow rays, every other ray).")
         .def(
             "set_instance_transform",

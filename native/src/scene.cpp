@@ -192,7 +192,7 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
 }
 
 void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
-    instance.world = to_world;
+    instance.world_translation = glm::dvec3(to_world[3]);
     // The translation leaves world space in double, before anything is rounded to float.
     glm::dmat4 relative = to_world;
     relative[3] -= glm::dvec4(origin_, 0.0);
@@ -212,8 +212,8 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
 
 // The render origin: the centre of the placed box rounded to a multiple of q, the smallest power of two at
 // least twice the box's largest side. Why this rule:
-//  - a box that holds the world origin gets origin 0 (each |centre| <= side/2 < q/2), so scenes near the origin
-//    render bit for bit as they did before render space existed;
+//  - a box that holds the world origin gets origin 0 (each |centre| <= side/2 < q/2): for scenes around the
+//    origin render space is world space, coordinates unchanged;
 //  - render coordinates stay within side/2 + q/2 < 2.5 sides of 0: float precision as for the same scene at
 //    the world origin, within two bits;
 //  - the origin moves only when the box grows or shifts by about its size, so adding n instances re-expresses
@@ -233,7 +233,8 @@ void Scene::recentre() {
     // coordinates of accepted positions then stay within ±2e15, far inside float's range.
     if (origin == origin_ || !within_world(origin)) return;
     origin_ = origin;
-    for (Instance& instance : instances_) place(instance, instance.world);
+    for (Instance& instance : instances_)
+        instance.to_world[3] = glm::vec4(glm::vec3(instance.world_translation - origin_), 1.0f);
     for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);
 }
 

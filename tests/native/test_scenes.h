@@ -178,6 +178,8 @@ inline void build_moved_cornell_box(Scene& scene, glm::dvec3 offset) {
     const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.75f), 1.45f, glm::vec3(0.0f)});
     const uint32_t red = scene.add_material({"red", MaterialKind::diffuse, glm::vec3(0.75f, 0.1f, 0.1f), 1.45f, glm::vec3(0.0f)});
     const uint32_t glass = scene.add_material({"glass", MaterialKind::glass, glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
+    // The lamp first: the render origin moves as the meshes are added, and re-expresses it (scene.h).
+    scene.add_light(point_light("lamp", {}, 100.0f), offset + glm::dvec3(0.0, 0.0, 1.8f));
     glm::dmat4 moved(1.0);
     moved[3] = glm::dvec4(offset, 1.0);
     add_quad(scene, "floor", {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, white, moved);
@@ -186,7 +188,6 @@ inline void build_moved_cornell_box(Scene& scene, glm::dvec3 offset) {
     add_quad(scene, "left", {-1, -1, 0}, {-1, 1, 0}, {-1, 1, 2}, {-1, -1, 2}, red, moved);
     add_quad(scene, "right", {1, -1, 0}, {1, -1, 2}, {1, 1, 2}, {1, 1, 0}, white, moved);
     add_box(scene, "glass_block", {-0.5f, -0.2f, 0.01f}, {0.0f, 0.3f, 0.6f}, glass, moved);
-    scene.add_light(point_light("lamp", {}, 100.0f), offset + glm::dvec3(0.0, 0.0, 1.8f));
 }
 
 inline Camera moved_cornell_camera(glm::dvec3 offset, int width, int height) {

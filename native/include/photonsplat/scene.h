@@ -75,8 +75,10 @@ struct MeshData {
 struct Instance {
     uint32_t mesh;
     std::string name;          // for messages (the Blender object or instance)
-    glm::dmat4 world{1.0};     // object → world as given
     glm::mat4 to_world{1.0f};  // object → render space (world − Scene::origin()), what Embree and shading use
+    // The world-space translation as given (the linear part needs no more than to_world's float: a rotation or
+    // scale rounds the same wherever the object is).
+    glm::dvec3 world_translation{0.0};
     glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
     // The largest coordinate of the mesh's object-space box through the linear part: hit points on this
     // instance carry float rounding of this size, whatever their render-space coordinates (offset_ray_origin).
@@ -161,7 +163,8 @@ private:
 
     bool instance_is_flat(const Instance& instance) const;
     std::pair<glm::vec3, glm::vec3> render_bounds() const;  // bounds_min/max before their empty-scene fallback
-    void place(Instance& instance, const glm::dmat4& to_world) const;  // sets world, to_world, normal_to_world
+    // Sets the instance's transforms from `to_world` (world space) and its rounding_scale.
+    void place(Instance& instance, const glm::dmat4& to_world) const;
     void recentre();  // origin_ from placed_min_/max_; re-expresses instances and lights if it moved
 };
 
