@@ -115,7 +115,8 @@ void bind_translation(py::module_& m) {
             },
             "instance_id"_a, "transform"_a,
             "Moves an instance. Meshes and their BVHs are kept; the next render refits the top-level BVH over the "
-            "instances only (O(instances), no triangle touched). Do not call during a render of this scene.")
+            "instances only (O(instances), no triangle touched). Call fit_origin() after the moves. Do not call "
+            "during a render of this scene.")
         .def(
             "add_mesh",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,

@@ -221,21 +221,50 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
 // Why the geometry's box and not the camera: it is the camera-independent middle of what rays hit (a camera
 // far from its scene sees it small, where float's rounding at the camera's distance no longer shows), and the
 // scene stays valid for any camera and for renders that share it (the viewport).
-void Scene::recentre() {
-    if (!(placed_min_.x <= placed_max_.x)) return;  // nothing placed yet
+bool Scene::recentre() {
+    if (!(placed_min_.x <= placed_max_.x)) return false;  // nothing placed yet
     const glm::dvec3 extent = placed_max_ - placed_min_;
     const double side = std::max(extent.x, std::max(extent.y, extent.z));
-    if (!(side > 0.0)) return;
+    if (!(side > 0.0)) return false;
     const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
     const glm::dvec3 centre = 0.5 * (placed_min_ + placed_max_);
     const glm::dvec3 origin = q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
     // Beyond ±1e15 (geometry scaled up past where coordinates are accepted) the origin stays: render-space
     // coordinates of accepted positions then stay within ±2e15, far inside float's range.
-    if (origin == origin_ || !within_world(origin)) return;
+    if (origin == origin_ || !within_world(origin)) return false;
     origin_ = origin;
     for (Instance& instance : instances_)
         instance.to_world[3] = glm::vec4(glm::vec3(instance.world_translation - origin_), 1.0f);
     for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);
+    return true;
+}
+
+// The instance's world-space box (its mesh's box corners through its transform, in double) joins the placed box.
+void Scene::include_in_placed_box(const Instance& instance) {
+    const MeshData& mesh = meshes_[instance.mesh];
+    if (instance_is_flat(instance) || mesh.triangle_count() == 0) return;
+    glm::dmat4 to_world(instance.to_world);
+    to_world[3] = glm::dvec4(instance.world_translation, 1.0);
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                           (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                           (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::dvec3 w(to_world * glm::dvec4(p, 1.0));
+        placed_min_ = glm::min(placed_min_, w);
+        placed_max_ = glm::max(placed_max_, w);
+    }
+}
+
+void Scene::fit_origin() {
+    placed_min_ = glm::dvec3(std::numeric_limits<double>::infinity());
+    placed_max_ = glm::dvec3(-std::numeric_limits<double>::infinity());
+    for (const Instance& instance : instances_) include_in_placed_box(instance);
+    if (!recentre()) return;
+    // Every instance's render-space translation changed: the next render updates them all (a refit).
+    std::lock_guard<std::mutex> lock(ray_tracer_mutex());
+    if (!ray_tracer_) return;
+    moved_instances_.resize(instances_.size());
+    for (uint32_t i = 0; i < instances_.size(); ++i) moved_instances_[i] = i;
 }
 
 uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name, uint32_t visibility) {
@@ -253,17 +282,7 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const st
     instance.name = label;
     instance.visibility = visibility;
     place(instance, to_world);
-    const MeshData& data = meshes_[mesh];
-    if (!instance_is_flat(instance) && data.triangle_count() > 0) {
-        for (int corner = 0; corner < 8; ++corner) {
-            const glm::dvec3 p((corner & 1) ? data.bounds_max.x : data.bounds_min.x,
-                               (corner & 2) ? data.bounds_max.y : data.bounds_min.y,
-                               (corner & 4) ? data.bounds_max.z : data.bounds_min.z);
-            const glm::dvec3 w(to_world * glm::dvec4(p, 1.0));
-            placed_min_ = glm::min(placed_min_, w);
-            placed_max_ = glm::max(placed_max_, w);
-        }
-    }
+    include_in_placed_box(instance);
     instances_.push_back(std::move(instance));
     recentre();
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());

@@ -4,7 +4,8 @@ A small scene (a floor, a cube, a glass sphere, a point light, a camera) rendere
 object and the camera moved by (1e5, -1e5, 1e5). Blender keeps matrices in float32 (locations 7.8 mm apart at
 1e5), so the scene's locations are multiples of 1/128: moved, they stay exactly what they were relative to each
 other, and any difference in the image is the renderer's. The core renders far scenes relative to a render origin
-near their geometry (native/include/photonsplat/scene.h). Two 32×32 renders of 20k photons: about 2 s.
+near their geometry (native/include/photonsplat/scene.h). Two 32×32 renders of 20k photons: about 2 s; and the
+viewport's in-place moves: under a second.
 """
 
 import bpy
@@ -49,3 +50,24 @@ def test_scene_moved_by_1e5_renders_the_same_image(empty_scene, tmp_path, core):
     difference = np.abs(rgb1 - rgb0).sum() / np.abs(rgb0).sum()
     print(f"\nmoved by 1e5: mean absolute difference {difference:.3g} of the mean radiance {rgb0.mean():.4f}")
     assert difference < 1e-3
+
+
+def test_viewport_moves_keep_precision(empty_scene, core):
+    """The viewport moves objects in place (SceneCache: set_instance_transform, then fit_origin): moved by 1e5,
+    its core scene's render origin is the one a new export gets, so it renders as that export does."""
+    from test_viewport import DepsgraphUpdates
+    from photonsplat.export.scene_cache import SceneCache
+
+    scene = empty_scene
+    build_scene(scene)
+    cache = SceneCache()
+    cache.sync(core, bpy.context.evaluated_depsgraph_get())
+    assert cache.scene.origin == (0.0, 0.0, 0.0)
+    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+        for ob in scene.objects:
+            ob.location = tuple(a + b for a, b in zip(ob.location, OFFSET))
+        reports = updates.evaluate()
+    assert sum(r.moved for r in reports) == 3 and not any(r.rebuilt for r in reports)
+    fresh = SceneCache()
+    fresh.sync(core, bpy.context.evaluated_depsgraph_get())
+    assert cache.scene.origin == fresh.scene.origin == OFFSET

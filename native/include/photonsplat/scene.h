@@ -107,9 +107,14 @@ public:
     uint32_t add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name = "",
                           uint32_t visibility = kAllRays);
     // Moves an instance. Cost: O(1) here, then one refit of the top-level BVH (all instances, no triangle
-    // touched) at the next render. Keeps origin(), so that moving objects in the viewport neither costs O(scene)
-    // nor changes the rounding of the objects left in place. Not to be called while a render of this scene runs.
+    // touched) at the next render. Keeps origin() (moving n instances one by one must not cost O(n · scene));
+    // fit_origin() after the moves puts it where a new scene would have it. Not to be called while a render of
+    // this scene runs.
     void set_instance_transform(uint32_t instance, const glm::dmat4& to_world);
+    // Moves origin() to where the instances are now (O(instances)): after it, the scene renders bit for bit as a
+    // scene built anew with the same content. Cheap when nothing moved far: the origin only changes when the
+    // instances' box grows or shifts by about its size. Not to be called while a render of this scene runs.
+    void fit_origin();
     void add_mesh(const MeshInput& mesh);              // add_mesh_data + add_instance(mesh.transform)
     // Adds a light; its position (point, spot: centre; area: centre) is light.position, in world space, or
     // `world_position` in double where given (light.position is then not read).
@@ -153,7 +158,7 @@ private:
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};
     glm::dvec3 origin_{0.0};
-    // World-space box of every instance added (add_instance only; see set_instance_transform), in double.
+    // World-space box of the instances as placed by add_instance (and as they are after fit_origin), in double.
     glm::dvec3 placed_min_{std::numeric_limits<double>::infinity()};
     glm::dvec3 placed_max_{-std::numeric_limits<double>::infinity()};
     size_t dropped_in_meshes_ = 0;
@@ -165,7 +170,8 @@ private:
     std::pair<glm::vec3, glm::vec3> render_bounds() const;  // bounds_min/max before their empty-scene fallback
     // Sets the instance's transforms from `to_world` (world space) and its rounding_scale.
     void place(Instance& instance, const glm::dmat4& to_world) const;
-    void recentre();  // origin_ from placed_min_/max_; re-expresses instances and lights if it moved
+    void include_in_placed_box(const Instance& instance);
+    bool recentre();  // origin_ from placed_min_/max_; re-expresses instances and lights if it moved (true)
 };
 
 }  // namespace ps
