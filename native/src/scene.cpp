@@ -17,6 +17,8 @@ namespace ps {
 
 namespace {
 
+constexpr float kCentreRatio = 64.0f;  // see add_mesh_data: meshes this many sizes from their origin are re-centred
+
 std::mutex& ray_tracer_mutex() {
     static std::mutex m;
     return m;
@@ -41,6 +43,18 @@ void require_finite_transform(const glm::dmat4& m, const std::string& field) {
     // Only affine transforms place a mesh (Blender's world matrices always are).
     if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0)
         throw InvalidInput(field, "must be affine (last row 0, 0, 0, 1)");
+}
+
+// A box's centre rounded to a multiple of q, the smallest power of two at least twice its largest side; 0 for
+// a box that holds 0, and `keep` for an empty or flat-to-a-point box. Used for Scene::origin() and MeshData::centre.
+glm::dvec3 grid_centre(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& keep) {
+    if (!(lo.x <= hi.x)) return keep;  // empty
+    const glm::dvec3 extent = hi - lo;
+    const double side = std::max(extent.x, std::max(extent.y, extent.z));
+    if (!(side > 0.0)) return keep;
+    const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    return q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
 }
 
 // The normal matrix, or false when the transform flattens space (zero scale on some axis).
@@ -186,19 +200,36 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
             data.bounds_max = glm::max(data.bounds_max, v);
         }
     }
+    // Far from the object origin, positions become relative to the mesh's centre (MeshData): exact, since the
+    // centre is a multiple of a power of two at least the float spacing of any vertex near it. Only beyond 64
+    // sizes from the object origin: nearer, vertices lose at most 6 bits to that distance, which the ray offset
+    // covers (Instance::rounding_scale), and ordinary meshes keep their coordinates bit for bit.
+    const glm::vec3 extent = data.bounds_max - data.bounds_min;
+    const float side = std::max(extent.x, std::max(extent.y, extent.z));
+    const glm::vec3 reach = glm::max(glm::abs(data.bounds_min), glm::abs(data.bounds_max));
+    if (!first && std::max(reach.x, std::max(reach.y, reach.z)) > kCentreRatio * side) {
+        data.centre = glm::vec3(grid_centre(glm::dvec3(data.bounds_min), glm::dvec3(data.bounds_max), glm::dvec3(0.0)));
+        if (data.centre != glm::vec3(0.0f)) {
+            for (glm::vec3& p : data.positions) p -= data.centre;
+            data.bounds_min -= data.centre;
+            data.bounds_max -= data.centre;
+        }
+    }
     // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
     meshes_.push_back(std::move(data));
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
 void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
-    instance.world_translation = glm::dvec3(to_world[3]);
+    const MeshData& mesh = meshes_[instance.mesh];
+    // Object space as kept is relative to the mesh's centre: the translation that places it is to_world's
+    // image of the centre, in double.
+    instance.world_translation = glm::dvec3(to_world * glm::dvec4(glm::dvec3(mesh.centre), 1.0));
     // The translation leaves world space in double, before anything is rounded to float.
     glm::dmat4 relative = to_world;
-    relative[3] -= glm::dvec4(origin_, 0.0);
+    relative[3] = glm::dvec4(instance.world_translation - origin_, 1.0);
     instance.to_world = glm::mat4(relative);
     if (!normal_matrix(instance.to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
-    const MeshData& mesh = meshes_[instance.mesh];
     const glm::mat3 linear(instance.to_world);
     instance.rounding_scale = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
@@ -222,13 +253,7 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
 // far from its scene sees it small, where float's rounding at the camera's distance no longer shows), and the
 // scene stays valid for any camera and for renders that share it (the viewport).
 bool Scene::recentre() {
-    if (!(placed_min_.x <= placed_max_.x)) return false;  // nothing placed yet
-    const glm::dvec3 extent = placed_max_ - placed_min_;
-    const double side = std::max(extent.x, std::max(extent.y, extent.z));
-    if (!(side > 0.0)) return false;
-    const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
-    const glm::dvec3 centre = 0.5 * (placed_min_ + placed_max_);
-    const glm::dvec3 origin = q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
+    const glm::dvec3 origin = grid_centre(placed_min_, placed_max_, origin_);
     // Beyond ±1e15 (geometry scaled up past where coordinates are accepted) the origin stays: render-space
     // coordinates of accepted positions then stay within ±2e15, far inside float's range.
     if (origin == origin_ || !within_world(origin)) return false;

@@ -173,21 +173,25 @@ inline Camera transformed_cornell_camera(float scale, glm::vec3 offset, int widt
 // The Cornell box above (scale 1) the way Blender gives a scene moved by `offset`: every mesh in object space,
 // placed by an object-to-world transform whose translation is `offset`; the lamp and the camera at offset +
 // their place, in double. Without the box's ties (see SameImageMovedBy1e3And1e5): the glass block stands 1 cm
-// above the floor, and the camera is off the box's symmetry plane.
-inline void build_moved_cornell_box(Scene& scene, glm::dvec3 offset) {
+// above the floor, and the camera is off the box's symmetry plane. in_vertices: the offset is in the vertices
+// instead (float32, rounded to its spacing there), the transforms are the identity.
+inline void build_moved_cornell_box(Scene& scene, glm::dvec3 offset, bool in_vertices = false) {
     const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.75f), 1.45f, glm::vec3(0.0f)});
     const uint32_t red = scene.add_material({"red", MaterialKind::diffuse, glm::vec3(0.75f, 0.1f, 0.1f), 1.45f, glm::vec3(0.0f)});
     const uint32_t glass = scene.add_material({"glass", MaterialKind::glass, glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
     // The lamp first: the render origin moves as the meshes are added, and re-expresses it (scene.h).
     scene.add_light(point_light("lamp", {}, 100.0f), offset + glm::dvec3(0.0, 0.0, 1.8f));
     glm::dmat4 moved(1.0);
-    moved[3] = glm::dvec4(offset, 1.0);
-    add_quad(scene, "floor", {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, white, moved);
-    add_quad(scene, "ceiling", {-1, -1, 2}, {-1, 1, 2}, {1, 1, 2}, {1, -1, 2}, white, moved);
-    add_quad(scene, "back", {-1, 1, 0}, {1, 1, 0}, {1, 1, 2}, {-1, 1, 2}, white, moved);
-    add_quad(scene, "left", {-1, -1, 0}, {-1, 1, 0}, {-1, 1, 2}, {-1, -1, 2}, red, moved);
-    add_quad(scene, "right", {1, -1, 0}, {1, -1, 2}, {1, 1, 2}, {1, 1, 0}, white, moved);
-    add_box(scene, "glass_block", {-0.5f, -0.2f, 0.01f}, {0.0f, 0.3f, 0.6f}, glass, moved);
+    if (!in_vertices) moved[3] = glm::dvec4(offset, 1.0);
+    auto P = [&](float x, float y, float z) {
+        return in_vertices ? glm::vec3(offset + glm::dvec3(x, y, z)) : glm::vec3(x, y, z);
+    };
+    add_quad(scene, "floor", P(-1, -1, 0), P(1, -1, 0), P(1, 1, 0), P(-1, 1, 0), white, moved);
+    add_quad(scene, "ceiling", P(-1, -1, 2), P(-1, 1, 2), P(1, 1, 2), P(1, -1, 2), white, moved);
+    add_quad(scene, "back", P(-1, 1, 0), P(1, 1, 0), P(1, 1, 2), P(-1, 1, 2), white, moved);
+    add_quad(scene, "left", P(-1, -1, 0), P(-1, 1, 0), P(-1, 1, 2), P(-1, -1, 2), red, moved);
+    add_quad(scene, "right", P(1, -1, 0), P(1, -1, 2), P(1, 1, 2), P(1, 1, 0), white, moved);
+    add_box(scene, "glass_block", P(-0.5f, -0.2f, 0.01f), P(0.0f, 0.3f, 0.6f), glass, moved);
 }
 
 inline Camera moved_cornell_camera(glm::dvec3 offset, int width, int height) {

@@ -58,9 +58,16 @@ enum RayVisibility : uint32_t {
 };
 
 // A mesh in object space, as validated and kept by the scene. Only non-degenerate triangles are kept.
+// Positions (and the bounds) are kept relative to `centre`: 0 for ordinary meshes (their coordinates are kept
+// bit for bit), and for a mesh more than 64 of its sizes away from its object origin the centre of its box on
+// the same power-of-two grid as Scene::origin(). Such a mesh (vertices far out, float32 input) then has small
+// coordinates too (the subtraction is exact: both are multiples of float's spacing there), and instances place
+// it through their transform times a translation by `centre`, taken in double. What stays is the input's own
+// rounding (7.8 mm steps at 1e5).
 struct MeshData {
     std::string name;
-    std::vector<glm::vec3> positions;
+    glm::vec3 centre{0.0f};
+    std::vector<glm::vec3> positions;   // object space minus centre
     std::vector<uint32_t> indices;      // 3 per triangle
     std::vector<glm::vec3> normals;     // 3 per triangle (corner shading normals); empty: flat shading
     std::vector<glm::vec2> uvs;         // 3 per triangle; empty: no UV map (every UV is 0, 0)
