@@ -229,7 +229,13 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
     glm::dmat4 relative = to_world;
     relative[3] = glm::dvec4(instance.world_translation - origin_, 1.0);
     instance.to_world = glm::mat4(relative);
-    if (!normal_matrix(instance.to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    // A re-centred mesh scaled up can land beyond ±1e15, where rays cannot be traced: it then covers nothing
+    // (counted as dropped), like a flattened one.
+    if (!normal_matrix(instance.to_world, instance.normal_to_world) || !within_world(instance.world_translation)) {
+        instance.normal_to_world = glm::mat3(0.0f);
+        instance.to_world[3] = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+        instance.world_translation = glm::dvec3(0.0);
+    }
     const glm::mat3 linear(instance.to_world);
     instance.rounding_scale = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
