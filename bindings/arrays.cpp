@@ -68,7 +68,35 @@ glm::vec3 vec3(const py::object& obj, const std::string& field) {
     return v;
 }
 
+// Like float_array, but to float64 (no rounding of float64 input).
+py::array_t<double, py::array::c_style> double_array(const py::object& obj, const std::string& field) {
+    py::array a = py::array::ensure(obj);
+    if (!a) throw ps::InvalidInput(field, "must be a numpy array (or convertible to one)");
+    const char kind = a.dtype().kind();
+    if (kind != 'f' && kind != 'i' && kind != 'u')
+        throw ps::InvalidInput(field, "must hold real numbers, got dtype " + dtype_of(a));
+    return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+glm::dvec3 dvec3(const py::object& obj, const std::string& field) {
+    py::array_t<double, py::array::c_style> a = double_array(obj, field);
+    if (a.size() != 3) throw ps::InvalidInput(field, "must have 3 components, got shape " + shape_of(a));
+    glm::dvec3 v(a.data()[0], a.data()[1], a.data()[2]);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        throw ps::InvalidInput(field, "must be finite");
+    return v;
+}
+
 // Row-major numpy (math convention: world = M @ [x, y, z, 1]) into column-major glm.
+glm::dmat4 dmat4(const py::object& obj, const std::string& field) {
+    py::array_t<double, py::array::c_style> a = double_array(obj, field);
+    require_shape(a, {4, 4}, field, "(4, 4)");
+    glm::dmat4 m;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c);
+    return m;
+}
+
 glm::mat4 mat4(const py::object& obj, const std::string& field) {
     py::array_t<float, py::array::c_style> a = float_array(obj, field);
     require_shape(a, {4, 4}, field, "(4, 4)");

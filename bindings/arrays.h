@@ -34,7 +34,11 @@ void require_shape(const py::array& a, std::initializer_list<py::ssize_t> shape,
                    const std::string& expected);
 
 glm::vec3 vec3(const py::object& obj, const std::string& field);         // 3 finite components
-glm::mat4 mat4(const py::object& obj, const std::string& field);         // (4, 4) row-major numpy
+// Positions and transforms are read in double, whatever the array's dtype: float64 keeps a point far from the
+// world origin exact (the core subtracts the render origin before rounding to float, see scene.h).
+glm::dvec3 dvec3(const py::object& obj, const std::string& field);       // 3 finite components
+glm::dmat4 dmat4(const py::object& obj, const std::string& field);       // (4, 4) row-major numpy
+glm::mat4 mat4(const py::object& obj, const std::string& field);         // (4, 4) row-major numpy, float
 int positive_int(const py::object& obj, const std::string& field);       // Python int in [1, 65536]
 
 // (height, width, channels) float32 copy of a row-major buffer.

@@ -120,10 +120,10 @@ PYBIND11_MODULE(_core, m) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::point;
-                l.position = vec3(position, "point light '" + name + "'.position");
+                const glm::dvec3 p = dvec3(position, "point light '" + name + "'.position");
                 l.value = vec3(intensity, "point light '" + name + "'.intensity");
                 l.radius = radius;
-                s.add_light(l);
+                s.add_light(l, p);
             },
             "name"_a, "position"_a, "intensity"_a, "radius"_a = 0.0f, "Isotropic point light; intensity in W/sr.")
         .def(
@@ -147,7 +147,7 @@ PYBIND11_MODULE(_core, m) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::area;
-                l.position = vec3(center, "area light '" + name + "'.center");
+                const glm::dvec3 c = dvec3(center, "area light '" + name + "'.center");
                 l.axis_u = vec3(axis_u, "area light '" + name + "'.axis_u");
                 l.axis_v = vec3(axis_v, "area light '" + name + "'.axis_v");
                 l.value = vec3(radiance, "area light '" + name + "'.radiance");
@@ -155,7 +155,7 @@ PYBIND11_MODULE(_core, m) {
                     throw ps::InvalidInput("area light '" + name + "'.shape",
                                            "must be 'rectangle' or 'ellipse', got '" + shape + "'");
                 l.ellipse = shape == "ellipse";
-                s.add_light(l);
+                s.add_light(l, c);
             },
             "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a, "shape"_a = "rectangle",
             "One-sided rectangle with full edge vectors u, v (or, shape='ellipse', the ellipse inscribed in it), "
@@ -170,10 +170,11 @@ PYBIND11_MODULE(_core, m) {
         .def_property_readonly("material_count", [](const ps::Scene& s) { return s.materials().size(); })
         .def_property_readonly("light_count", [](const ps::Scene& s) { return s.lights().size(); });
 
-    py::class_<ps::Camera>(m, "Camera", "Camera from a (4,4) camera-to-world matrix and an OpenGL-style projection.")
+    py::class_<ps::Camera>(m, "Camera", "Camera from a (4,4) camera-to-world matrix (read in float64) and an "
+                                        "OpenGL-style projection.")
         .def(py::init([](const py::object& to_world, const py::object& projection, const py::object& width,
                          const py::object& height) {
-                 return ps::Camera(mat4(to_world, "camera.to_world"), mat4(projection, "camera.projection"),
+                 return ps::Camera(dmat4(to_world, "camera.to_world"), mat4(projection, "camera.projection"),
                                    positive_int(width, "camera.width"), positive_int(height, "camera.height"));
              }),
              "to_world"_a, "projection"_a, "width"_a, "height"_a)

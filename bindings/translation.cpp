@@ -100,21 +100,23 @@ void bind_translation(py::module_& m) {
             "add_instance",
             [](ps::Scene& s, uint32_t mesh, const py::object& transform, const std::string& name, bool camera,
                bool shadow, bool indirect) {
-                return s.add_instance(mesh, mat4(transform, "instance '" + name + "'.transform"), name,
+                return s.add_instance(mesh, dmat4(transform, "instance '" + name + "'.transform"), name,
                                       visibility_bits(camera, shadow, indirect));
             },
             "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
             "visible_indirect"_a = true,
-            "Places mesh mesh_id with a (4,4) row-major object-to-world transform; returns the instance id. "
+            "Places mesh mesh_id with a (4,4) row-major object-to-world transform (read in float64: a scene far "
+            "from the origin keeps its precision); returns the instance id. "
             "visible_*: which rays see it (camera rays, shadow rays, every other ray).")
         .def(
             "set_instance_transform",
             [](ps::Scene& s, uint32_t instance, const py::object& transform) {
-                s.set_instance_transform(instance, mat4(transform, "instance.transform"));
+                s.set_instance_transform(instance, dmat4(transform, "instance.transform"));
             },
             "instance_id"_a, "transform"_a,
             "Moves an instance. Meshes and their BVHs are kept; the next render refits the top-level BVH over the "
-            "instances only (O(instances), no triangle touched). Do not call during a render of this scene.")
+            "instances only (O(instances), no triangle touched). Call fit_origin() after the moves. Do not call "
+            "during a render of this scene.")
         .def(
             "add_mesh",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,
@@ -122,7 +124,7 @@ void bind_translation(py::module_& m) {
                const py::object& uvs) {
                 MeshArrays arrays;
                 ps::MeshInput mesh = mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays);
-                if (!transform.is_none()) mesh.transform = mat4(transform, "mesh '" + name + "'.transform");
+                if (!transform.is_none()) mesh.transform = dmat4(transform, "mesh '" + name + "'.transform");
                 s.add_mesh(mesh);
             },
             "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(), "material_ids"_a = py::none(),
@@ -155,13 +157,13 @@ void bind_translation(py::module_& m) {
                 ps::Light l;
                 l.name = name;
                 l.kind = ps::LightKind::spot;
-                l.position = vec3(position, "spot light '" + name + "'.position");
+                const glm::dvec3 p = dvec3(position, "spot light '" + name + "'.position");
                 l.direction = vec3(direction, "spot light '" + name + "'.direction");
                 l.value = vec3(intensity, "spot light '" + name + "'.intensity");
                 l.spot_size = spot_size;
                 l.spot_blend = spot_blend;
                 l.radius = radius;
-                s.add_light(l);
+                s.add_light(l, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
             "radius"_a = 0.0f,

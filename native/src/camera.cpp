@@ -16,7 +16,8 @@ namespace ps {
 
 namespace {
 
-bool all_finite(const glm::mat4& m) {
+template <typename Matrix>
+bool all_finite(const Matrix& m) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r)
             if (!std::isfinite(m[c][r])) return false;
@@ -25,12 +26,14 @@ bool all_finite(const glm::mat4& m) {
 
 }  // namespace
 
-Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width, int height)
-    : to_world_(to_world), width_(width), height_(height) {
+Camera::Camera(const glm::dmat4& to_world_input, const glm::mat4& projection, int width, int height)
+    : to_world_(to_world_input), world_position_(to_world_input[3]), width_(width), height_(height) {
+    // The rotation part is kept in float (a direction needs no more); the position in double.
+    const glm::mat4 to_world(to_world_);
     if (width < 1 || height < 1)
         throw InvalidInput("camera.width/height", "must be at least 1×1, got " + std::to_string(width) + "×" +
                                                        std::to_string(height));
-    if (!all_finite(to_world)) throw InvalidInput("camera.to_world", "contains NaN or infinity");
+    if (!all_finite(to_world_input)) throw InvalidInput("camera.to_world", "contains NaN or infinity");
     if (!all_finite(projection)) throw InvalidInput("camera.projection", "contains NaN or infinity");
     if (std::fabs(glm::determinant(glm::mat3(to_world))) < 1e-12f)
         throw InvalidInput("camera.to_world", "is singular (zero scale?)");
@@ -39,7 +42,10 @@ Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width
     // Remove any scale: Cycles does the same with the camera object's matrix.
     for (int c = 0; c < 3; ++c) to_world_[c] = glm::vec4(glm::normalize(glm::vec3(to_world_[c])), 0.0f);
     to_world_[3].w = 1.0f;
-    if (!within_world(glm::vec3(to_world_[3])) || !is_finite(glm::vec3(to_world_[0])) ||
+    const glm::dvec3 p = world_position_;
+    const bool position_ok = std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate &&
+                             std::fabs(p.z) <= kMaxCoordinate;
+    if (!position_ok || !is_finite(glm::vec3(to_world_[0])) ||
         !is_finite(glm::vec3(to_world_[1])) || !is_finite(glm::vec3(to_world_[2])))
         throw InvalidInput("camera.to_world", "position must be finite and within ±1e15, axes finite and non-zero");
     inverse_projection_ = glm::inverse(projection);
@@ -61,6 +67,13 @@ Camera::Camera(const glm::mat4& to_world, const glm::mat4& projection, int width
     if (!std::isfinite(far_) || far_ <= 0.0f) far_ = std::numeric_limits<float>::infinity();
     if (!std::isfinite(near_) || (!orthographic_ && near_ <= 0.0f))
         throw InvalidInput("camera.projection", "near clip distance must be positive, got " + std::to_string(near_));
+}
+
+Camera Camera::relative_to(const glm::dvec3& origin) const {
+    Camera c = *this;
+    c.origin_ = origin;
+    c.to_world_[3] = glm::vec4(glm::vec3(world_position_ - origin), 1.0f);
+    return c;
 }
 
 Ray Camera::generate_ray(float px, float py) const {

@@ -61,7 +61,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                                                                   u1, u2);
                         if (g.pdf > 0.0f && glm::dot(g.direction, s.normal) > 0.0f) {
                             ++rays;
-                            const Ray ray{offset_ray_origin(x, s.normal), g.direction};
+                            const Ray ray{offset_ray_origin(x, s.normal, s.rounding_scale), g.direction};
                             if (!tracer.occluded(ray, 0.0f, std::numeric_limits<float>::infinity(), kShadowRays))
                                 light_sum += g.weight * scene.background();
                         }
@@ -73,7 +73,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                     const float cos_shading = glm::dot(in.wi, s.shading_normal);
                     if (!(cos_shading > 0.0f) || in.value == glm::vec3(0.0f)) continue;
                     ++rays;
-                    const Ray shadow{offset_ray_origin(x, s.normal), in.wi};
+                    const Ray shadow{offset_ray_origin(x, s.normal, s.rounding_scale), in.wi};
                     // Stop just short of the light's own point so the light's surroundings still shadow it.
                     if (tracer.occluded(shadow, 0.0f, in.distance * (1.0f - 1e-4f), kShadowRays)) continue;
                     if (!glossy)

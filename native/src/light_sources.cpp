@@ -138,7 +138,8 @@ EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float
             glm::vec3 ng = glm::normalize(glm::cross(t.v1 - t.v0, t.v2 - t.v0));
             if (u5 < 0.5f) ng = -ng;  // both faces emit
             EmissionSample out;
-            out.origin = offset_ray_origin(point_on_triangle(t, u2, u3), ng);
+            out.origin = offset_ray_origin(point_on_triangle(t, u2, u3), ng,
+                                           scene_.instances()[emitters_[k].instance].rounding_scale);
             out.direction = sample_cosine_hemisphere(ng, u4, std::fmod(2.0f * u5, 1.0f));
             // Φ_k / p_k, with Φ_k = 2π·A_k·L_k: the triangle's colour rides on the photon's power.
             out.power = 2.0f * kPi * triangle_area(t) * emission_of(emitters_[k]) / emitter_probability_[k];

@@ -76,7 +76,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;
             power *= step.weight / keep;
             const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-            ray = Ray{offset_ray_origin(s.position, side), step.direction};
+            ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             continue;
         }
         // Diffuse or glossy hit. The first one is direct light, which shadow rays already account for. A glossy
@@ -95,7 +95,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;
             power *= step.weight / keep;
-            ray = Ray{offset_ray_origin(s.position, s.geometric_normal), step.direction};
+            ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), step.direction};
             continue;
         }
         const float keep = std::max({s.color.x, s.color.y, s.color.z});
@@ -104,7 +104,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const float v1 = rng.uniform(), v2 = rng.uniform();
         const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
         if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below the surface
-        ray = Ray{offset_ray_origin(s.position, s.geometric_normal), direction};
+        ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
     }
 }
 

@@ -9,6 +9,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/memory_budget.h"
 #include "photonsplat/render_control.h"
+#include "photonsplat/scene.h"
 
 namespace ps {
 
@@ -41,7 +42,7 @@ struct RunningFlag {
 }  // namespace
 
 ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, const RenderSettings& settings)
-    : scene_(scene), camera_(camera), settings_(settings) {
+    : scene_(scene), camera_(camera.relative_to(scene.origin())), settings_(settings) {
     validate(settings_);
     check_frame_memory(scene_, camera_, settings_, kSumBytesPerPixel);
     pixels_ = static_cast<size_t>(camera_.width()) * camera_.height();

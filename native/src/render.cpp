@@ -76,9 +76,10 @@ float first_radius(const Scene& scene, const RenderSettings& settings) {
     return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
 }
 
-RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,
+RenderResult render_pass(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
                          const PassParams& pass, RenderControl& control) {
     validate(settings);
+    const Camera camera = world_camera.relative_to(scene.origin());  // every stage works in render space
     RenderResult result;
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;

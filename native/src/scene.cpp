@@ -1,5 +1,6 @@
 #include "photonsplat/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -16,25 +17,44 @@ namespace ps {
 
 namespace {
 
+constexpr float kCentreRatio = 64.0f;  // see add_mesh_data: meshes this many sizes from their origin are re-centred
+
 std::mutex& ray_tracer_mutex() {
     static std::mutex m;
     return m;
 }
 
-bool all_finite(const glm::mat4& m) {
+bool all_finite(const glm::dmat4& m) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 4; ++r)
             if (!std::isfinite(m[c][r])) return false;
     return true;
 }
 
-void require_finite_transform(const glm::mat4& m, const std::string& field) {
+bool within_world(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::fabs(v.x) <= kMaxCoordinate &&
+           std::fabs(v.y) <= kMaxCoordinate && std::fabs(v.z) <= kMaxCoordinate;
+}
+
+void require_finite_transform(const glm::dmat4& m, const std::string& field) {
     if (!all_finite(m)) throw InvalidInput(field, "contains NaN or infinity");
-    if (!within_world(glm::vec3(m[3])))
+    if (!within_world(glm::dvec3(m[3])))
         throw InvalidInput(field, "places the object beyond ±1e15, where rays cannot be traced");
     // Only affine transforms place a mesh (Blender's world matrices always are).
-    if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0)
         throw InvalidInput(field, "must be affine (last row 0, 0, 0, 1)");
+}
+
+// A box's centre rounded to a multiple of q, the smallest power of two at least twice its largest side; 0 for
+// a box that holds 0, and `keep` for an empty or flat-to-a-point box. Used for Scene::origin() and MeshData::centre.
+glm::dvec3 grid_centre(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& keep) {
+    if (!(lo.x <= hi.x)) return keep;  // empty
+    const glm::dvec3 extent = hi - lo;
+    const double side = std::max(extent.x, std::max(extent.y, extent.z));
+    if (!(side > 0.0)) return keep;
+    const double q = std::exp2(std::ceil(std::log2(2.0 * side)));
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    return q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
 }
 
 // The normal matrix, or false when the transform flattens space (zero scale on some axis).
@@ -75,12 +95,23 @@ uint32_t Scene::add_texture(Texture texture) {
     return static_cast<uint32_t>(textures_.size() - 1);
 }
 
-void Scene::add_light(const Light& light) {
-    validate(light, std::string(to_string(light.kind)) + " light '" + light.name + "'");
-    lights_.push_back(light);
+void Scene::add_light(const Light& light) { add_light(light, glm::dvec3(light.position)); }
+
+void Scene::add_light(const Light& light, const glm::dvec3& world_position) {
+    const std::string where = std::string(to_string(light.kind)) + " light '" + light.name + "'";
+    if (!within_world(world_position))
+        throw InvalidInput(where + ".position", "must be finite and within ±1e15 on every axis");
+    Light placed = light;
+    placed.position = glm::vec3(world_position - origin_);
+    validate(placed, where);
+    lights_.push_back(placed);
+    light_positions_.push_back(world_position);
 }
 
-void Scene::clear_lights() { lights_.clear(); }
+void Scene::clear_lights() {
+    lights_.clear();
+    light_positions_.clear();
+}
 
 void Scene::set_background(const glm::vec3& radiance) {
     require_nonnegative_rgb(radiance, "background");
@@ -169,12 +200,105 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
             data.bounds_max = glm::max(data.bounds_max, v);
         }
     }
+    // Far from the object origin, positions become relative to the mesh's centre (MeshData): exact, since the
+    // centre is a multiple of a power of two at least the float spacing of any vertex near it. Only beyond 64
+    // sizes from the object origin: nearer, vertices lose at most 6 bits to that distance, which the ray offset
+    // covers (Instance::rounding_scale), and ordinary meshes keep their coordinates bit for bit.
+    const glm::vec3 extent = data.bounds_max - data.bounds_min;
+    const float side = std::max(extent.x, std::max(extent.y, extent.z));
+    const glm::vec3 reach = glm::max(glm::abs(data.bounds_min), glm::abs(data.bounds_max));
+    if (!first && std::max(reach.x, std::max(reach.y, reach.z)) > kCentreRatio * side) {
+        data.centre = glm::vec3(grid_centre(glm::dvec3(data.bounds_min), glm::dvec3(data.bounds_max), glm::dvec3(0.0)));
+        if (data.centre != glm::vec3(0.0f)) {
+            for (glm::vec3& p : data.positions) p -= data.centre;
+            data.bounds_min -= data.centre;
+            data.bounds_max -= data.centre;
+        }
+    }
     // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
     meshes_.push_back(std::move(data));
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
-uint32_t Scene::add_instance(uint32_t mesh, const glm::mat4& to_world, const std::string& name, uint32_t visibility) {
+void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
+    const MeshData& mesh = meshes_[instance.mesh];
+    // Object space as kept is relative to the mesh's centre: the translation that places it is to_world's
+    // image of the centre, in double.
+    instance.world_translation = glm::dvec3(to_world * glm::dvec4(glm::dvec3(mesh.centre), 1.0));
+    // The translation leaves world space in double, before anything is rounded to float.
+    glm::dmat4 relative = to_world;
+    relative[3] = glm::dvec4(instance.world_translation - origin_, 1.0);
+    instance.to_world = glm::mat4(relative);
+    // A re-centred mesh scaled up can land beyond ±1e15, where rays cannot be traced: it then covers nothing
+    // (counted as dropped), like a flattened one.
+    if (!normal_matrix(instance.to_world, instance.normal_to_world) || !within_world(instance.world_translation)) {
+        instance.normal_to_world = glm::mat3(0.0f);
+        instance.to_world[3] = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+        instance.world_translation = glm::dvec3(0.0);
+    }
+    const glm::mat3 linear(instance.to_world);
+    instance.rounding_scale = 0.0f;
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                          (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                          (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::vec3 q = glm::abs(linear * p);
+        instance.rounding_scale = std::max(instance.rounding_scale, std::max(q.x, std::max(q.y, q.z)));
+    }
+}
+
+// The render origin: the centre of the placed box rounded to a multiple of q, the smallest power of two at
+// least twice the box's largest side. Why this rule:
+//  - a box that holds the world origin gets origin 0 (each |centre| <= side/2 < q/2): for scenes around the
+//    origin render space is world space, coordinates unchanged;
+//  - render coordinates stay within side/2 + q/2 < 2.5 sides of 0: float precision as for the same scene at
+//    the world origin, within two bits;
+//  - the origin moves only when the box grows or shifts by about its size, so adding n instances re-expresses
+//    the scene O(log) times, not n times; and a multiple of a power of two is exact in double.
+// Why the geometry's box and not the camera: it is the camera-independent middle of what rays hit (a camera
+// far from its scene sees it small, where float's rounding at the camera's distance no longer shows), and the
+// scene stays valid for any camera and for renders that share it (the viewport).
+bool Scene::recentre() {
+    const glm::dvec3 origin = grid_centre(placed_min_, placed_max_, origin_);
+    // Beyond ±1e15 (geometry scaled up past where coordinates are accepted) the origin stays: render-space
+    // coordinates of accepted positions then stay within ±2e15, far inside float's range.
+    if (origin == origin_ || !within_world(origin)) return false;
+    origin_ = origin;
+    for (Instance& instance : instances_)
+        instance.to_world[3] = glm::vec4(glm::vec3(instance.world_translation - origin_), 1.0f);
+    for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);
+    return true;
+}
+
+// The instance's world-space box (its mesh's box corners through its transform, in double) joins the placed box.
+void Scene::include_in_placed_box(const Instance& instance) {
+    const MeshData& mesh = meshes_[instance.mesh];
+    if (instance_is_flat(instance) || mesh.triangle_count() == 0) return;
+    glm::dmat4 to_world(instance.to_world);
+    to_world[3] = glm::dvec4(instance.world_translation, 1.0);
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::dvec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                           (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                           (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::dvec3 w(to_world * glm::dvec4(p, 1.0));
+        placed_min_ = glm::min(placed_min_, w);
+        placed_max_ = glm::max(placed_max_, w);
+    }
+}
+
+void Scene::fit_origin() {
+    placed_min_ = glm::dvec3(std::numeric_limits<double>::infinity());
+    placed_max_ = glm::dvec3(-std::numeric_limits<double>::infinity());
+    for (const Instance& instance : instances_) include_in_placed_box(instance);
+    if (!recentre()) return;
+    // Every instance's render-space translation changed: the next render updates them all (a refit).
+    std::lock_guard<std::mutex> lock(ray_tracer_mutex());
+    if (!ray_tracer_) return;
+    moved_instances_.resize(instances_.size());
+    for (uint32_t i = 0; i < instances_.size(); ++i) moved_instances_[i] = i;
+}
+
+uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name, uint32_t visibility) {
     const std::string label = name.empty() ? (mesh < meshes_.size() ? meshes_[mesh].name : std::string("?")) : name;
     const std::string where = "instance '" + label + "'";
     if (mesh >= meshes_.size())
@@ -187,24 +311,24 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::mat4& to_world, const std
     Instance instance;
     instance.mesh = mesh;
     instance.name = label;
-    instance.to_world = to_world;
     instance.visibility = visibility;
-    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    place(instance, to_world);
+    include_in_placed_box(instance);
     instances_.push_back(std::move(instance));
+    recentre();
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     ray_tracer_.reset();
     moved_instances_.clear();
     return static_cast<uint32_t>(instances_.size() - 1);
 }
 
-void Scene::set_instance_transform(uint32_t id, const glm::mat4& to_world) {
+void Scene::set_instance_transform(uint32_t id, const glm::dmat4& to_world) {
     if (id >= instances_.size())
         throw InvalidInput("instance", "id " + std::to_string(id) + " out of range (the scene has " +
                                            std::to_string(instances_.size()) + " instances)");
     Instance& instance = instances_[id];
     require_finite_transform(to_world, "instance '" + instance.name + "'.transform");
-    instance.to_world = to_world;
-    if (!normal_matrix(to_world, instance.normal_to_world)) instance.normal_to_world = glm::mat3(0.0f);
+    place(instance, to_world);
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     if (ray_tracer_) moved_instances_.push_back(id);
 }
@@ -256,9 +380,9 @@ WorldTriangle Scene::world_triangle(uint32_t instance, uint32_t triangle) const 
     return {corner(0), corner(1), corner(2)};
 }
 
-// The world-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
+// The render-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
 // when nothing is placed.
-std::pair<glm::vec3, glm::vec3> Scene::world_bounds() const {
+std::pair<glm::vec3, glm::vec3> Scene::render_bounds() const {
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (const Instance& instance : instances_) {
         const MeshData& mesh = meshes_[instance.mesh];
@@ -276,12 +400,12 @@ std::pair<glm::vec3, glm::vec3> Scene::world_bounds() const {
 }
 
 glm::vec3 Scene::bounds_min() const {
-    const glm::vec3 lo = world_bounds().first;
+    const glm::vec3 lo = render_bounds().first;
     return std::isfinite(lo.x) ? lo : glm::vec3(-0.5f);
 }
 
 glm::vec3 Scene::bounds_max() const {
-    const glm::vec3 hi = world_bounds().second;
+    const glm::vec3 hi = render_bounds().second;
     return std::isfinite(hi.x) ? hi : glm::vec3(0.5f);
 }
 

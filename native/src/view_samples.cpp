@@ -59,6 +59,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
             sample.position = s.position;  // made camera-relative by the caller
             sample.normal = s.geometric_normal;
             sample.shading_normal = s.shading_normal;
+            sample.rounding_scale = s.rounding_scale;
             sample.wo = -ray.direction;
             sample.throughput = throughput;
             sample.flags = depth > 0 ? kViaSpecular : 0u;
@@ -85,15 +86,17 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, Ray ray, Rng& r
         throughput *= step.weight;
         if (throughput.x <= 0.0f && throughput.y <= 0.0f && throughput.z <= 0.0f) return false;
         const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-        ray = Ray{offset_ray_origin(s.position, side), step.direction};
+        ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
     }
 }
 
 }  // namespace
 
-ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,
+ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera, const ViewSampleSettings& settings,
                                   const RenderControl& control, Stats& stats) {
     StageTimer timer(stats, "view_samples");
+    // Render space (scene.h); render_pass has done it already, but this stage is also called on its own.
+    const Camera camera = world_camera.relative_to(scene.origin());
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     ViewSamples out;

@@ -4,6 +4,7 @@
 // the image is compared with it. Inputs the core refuses must raise InvalidInput naming the cause.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <string>
@@ -16,6 +17,7 @@
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/memory_budget.h"
 #include "photonsplat/ray_tracer.h"
+#include "photonsplat/reference.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
@@ -280,18 +282,130 @@ TEST(HardCases, SameImageAtScales1em3And1e4) {
     }
 }
 
-// KNOWN FAILURE, kept disabled (see docs/robustness.md): far from the origin float32 world coordinates lose
-// precision and the self-intersection offset (offset_ray_origin: 256 ulps) grows with them: 1.6 cm at 1e3, 2 m at
-// 1e5. Measured after merging instanced scenes: moved by 1e3, total indirect light 3.2 % low (systematic: the
-// same at 10k and 40k photons); by 1e5, direct light 67 % off (shadow rays start outside the box). Needs
-// geometry relative to a scene origin and offsets from error bounds.
-TEST(HardCases, DISABLED_SameImageMovedBy1e3And1e5) {
+// A scene far from the world origin renders as at the origin (issue 6: "translated by 1e5 giving the same image
+// to 1e-3"), given the way Blender gives it: meshes in object space, the object transforms carrying the offset,
+// lamp and camera positions in double (see scene.h, render space). Offsets 1e3 and 1e5, on the render origin's
+// grid (the render-space scene is then bit for bit the one at the origin) and off it by float32 fractions
+// (what a Blender location holds: the render-space scene then rounds differently, so ties break otherwise and
+// photon paths may diverge). Measured (40k photons, 24×24, every method): on the grid the image is identical;
+// off it, direct 2.0e-7 and indirect total 6.0e-5, at 1e3 and at 1e5 alike. The box's scene differs from the one
+// above in two ties only: its glass block stands 1 cm above the floor instead of sharing its bottom face with
+// it, and the camera is moved off the box's symmetry plane, where pixel centres fell exactly on the box's edges.
+// In such ties any rounding decides which face a ray hits: the scene above moved by just 0.3 (no precision
+// problem at all) already differs by 0.8 % (direct) and 1.2 % (indirect total).
+TEST(HardCases, SameImageMovedBy1e3And1e5) {
     for (SplatMethod method : all_methods()) {
-        const RenderResult origin = render_transformed(1.0f, glm::vec3(0.0f), method);
-        for (float offset : {1e3f, 1e5f}) {
-            const ImageDifference d = compare(origin, render_transformed(1.0f, glm::vec3(offset, -offset, offset), method));
-            EXPECT_LT(d.direct, 1e-3) << to_string(method) << " moved by " << offset;
-            EXPECT_LT(d.indirect_total, 1e-2) << to_string(method) << " moved by " << offset;
+        SCOPED_TRACE(to_string(method));
+        RenderSettings settings;
+        settings.photons = 40000;
+        settings.radius = 0.1f;
+        settings.seed = 3;
+        auto render_moved = [&](glm::dvec3 offset) {
+            Scene scene;
+            test::build_moved_cornell_box(scene, offset);
+            return render_with(scene, test::moved_cornell_camera(offset, 24, 24), settings, method);
+        };
+        const RenderResult origin = render_moved(glm::dvec3(0.0));
+        for (double d : {1e3, 1e5}) {
+            for (double fraction : {0.0, double(float(d + 0.3)) - d}) {
+                const glm::dvec3 offset(d + fraction, -d - fraction, d + 0.5 * fraction);
+                const ImageDifference diff = compare(origin, render_moved(offset));
+                std::printf("%s moved by %.7g: direct %.3g, indirect total %.3g, image %.3g\n", to_string(method),
+                            offset.x, diff.direct, diff.indirect_total, diff.image);
+                EXPECT_LT(diff.direct, 1e-3) << "moved by " << offset.x;
+                EXPECT_LT(diff.indirect_total, 1e-2) << "moved by " << offset.x;
+                if (fraction == 0.0) EXPECT_EQ(diff.image, 0.0) << "moved by " << offset.x;
+            }
+        }
+    }
+}
+
+// The other ways in, moved by an off-grid 1e5: progressive passes (ProgressiveRender keeps its camera) and the
+// reference renderer, each against the same at the origin; and where the render origin goes (scene.h).
+TEST(HardCases, ProgressiveAndReferenceRenderMovedScenesAlikeAndTheOriginFollowsTheGeometry) {
+    const double d = 1e5, fraction = double(float(d + 0.3)) - d;
+    const glm::dvec3 far(d + fraction, -d - fraction, d + 0.5 * fraction);
+    Scene at_origin, moved;
+    test::build_moved_cornell_box(at_origin, glm::dvec3(0.0));
+    test::build_moved_cornell_box(moved, far);
+    EXPECT_EQ(at_origin.origin(), glm::dvec3(0.0));                  // its box holds the world origin
+    EXPECT_EQ(moved.origin(), glm::dvec3(1e5, -1e5, 1e5));          // the box's centre on a 4 m grid
+    EXPECT_LT(glm::length(glm::vec3(moved.lights()[0].position) - glm::vec3(0.3f, -0.3f, 1.95f)), 0.01f);
+
+    RenderSettings settings;
+    settings.photons = 10000;
+    settings.radius = 0.1f;
+    settings.passes = 2;
+    RenderControl control;
+    const RenderResult a = render(at_origin, test::moved_cornell_camera(glm::dvec3(0.0), 16, 16), settings, control);
+    const RenderResult b = render(moved, test::moved_cornell_camera(far, 16, 16), settings, control);
+    EXPECT_LT(mean_abs_relative(a.direct, b.direct), 1e-3);
+    EXPECT_LT(mean_abs_relative(a.rgba, b.rgba), 1e-2);
+
+    ReferenceSettings reference;
+    reference.samples = 2;
+    reference.caustic_photons = 2000;
+    const ReferenceResult ra = render_reference(at_origin, test::moved_cornell_camera(glm::dvec3(0.0), 16, 16), reference, control);
+    const ReferenceResult rb = render_reference(moved, test::moved_cornell_camera(far, 16, 16), reference, control);
+    EXPECT_LT(mean_abs_relative(ra.rgba, rb.rgba), 1e-2);
+
+    // Moving an instance keeps the origin (no O(scene) work per move); fit_origin then follows the instances.
+    moved.set_instance_transform(0, glm::dmat4(1.0));
+    EXPECT_EQ(moved.origin(), glm::dvec3(1e5, -1e5, 1e5));
+}
+
+// The viewport's way (scene_cache.py): a scene built at the origin, every instance moved by 1e5 in place with
+// set_instance_transform, then fit_origin: bit for bit the image of the scene built there, for every method.
+TEST(HardCases, InstancesMovedFarInPlaceRenderAsAFreshSceneAfterFitOrigin) {
+    const double d = 1e5, fraction = double(float(d + 0.3)) - d;
+    const glm::dvec3 far(d + fraction, -d - fraction, d + 0.5 * fraction);
+    glm::dmat4 moved_transform(1.0);
+    moved_transform[3] = glm::dvec4(far, 1.0);
+    Scene in_place, fresh;
+    test::build_moved_cornell_box(in_place, glm::dvec3(0.0));
+    test::build_moved_cornell_box(fresh, far);
+    const Camera camera = test::moved_cornell_camera(far, 16, 16);
+    RenderSettings settings;
+    settings.photons = 5000;
+    settings.radius = 0.1f;
+    render_with(in_place, camera, settings, SplatMethod::brute);  // builds the BVH: the moves below refit it
+    for (uint32_t i = 0; i < in_place.instances().size(); ++i) in_place.set_instance_transform(i, moved_transform);
+    in_place.clear_lights();
+    in_place.add_light(test::point_light("lamp", {}, 100.0f), far + glm::dvec3(0.0, 0.0, 1.8f));
+    EXPECT_EQ(in_place.origin(), glm::dvec3(0.0));
+    in_place.fit_origin();
+    EXPECT_EQ(in_place.origin(), fresh.origin());
+    for (SplatMethod method : all_methods()) {
+        const RenderResult a = render_with(in_place, camera, settings, method), b = render_with(fresh, camera, settings, method);
+        EXPECT_EQ(a.rgba, b.rgba) << to_string(method);
+    }
+}
+
+// The same box with the offset in its *vertices* (identity transforms: float32 input, rounded to 7.8 mm steps at
+// 1e5, as a mesh with applied transforms or imported survey data gives it). The scene keeps such a mesh relative
+// to its box's centre (MeshData::centre), so it renders as the rounded geometry it is. Measured (40k photons,
+// every method): 1e3: direct 4.7e-7, indirect total 0; 1e5: direct 3.5e-5, indirect total 6.7e-4 — what moving
+// the box's vertices by up to 3.9 mm costs. Without the re-centring (offset_ray_origin's rounding_scale alone):
+// 1.1e-4 / 8.7e-4 and 4.1 % / 3.1 %; before render space (the box with ties): 0.66 % / −3.1 % and 34 % / −75 %.
+// Still not precise: geometry finer than float32's spacing where its vertices are (at 1e5, under 7.8 mm).
+TEST(HardCases, SameImageWithVerticesMovedBy1e3And1e5) {
+    for (SplatMethod method : all_methods()) {
+        RenderSettings settings;
+        settings.photons = 40000;
+        settings.radius = 0.1f;
+        settings.seed = 3;
+        auto render_moved = [&](glm::dvec3 offset) {
+            Scene scene;
+            test::build_moved_cornell_box(scene, offset, true);
+            return render_with(scene, test::moved_cornell_camera(offset, 24, 24), settings, method);
+        };
+        const RenderResult origin = render_moved(glm::dvec3(0.0));
+        for (double d : {1e3, 1e5}) {
+            const ImageDifference diff = compare(origin, render_moved(glm::dvec3(d, -d, d)));
+            std::printf("%s vertices moved by %g: direct %.3g, indirect total %.3g\n", to_string(method), d, diff.direct,
+                        diff.indirect_total);
+            EXPECT_LT(diff.direct, 1e-3) << "moved by " << d;
+            EXPECT_LT(diff.indirect_total, 1e-2) << "moved by " << d;
         }
     }
 }

@@ -12,7 +12,7 @@
 namespace ps::test {
 
 inline void add_quad(Scene& scene, const char* name, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d,
-                     uint32_t material) {
+                     uint32_t material, const glm::dmat4& transform = glm::dmat4(1.0)) {
     const float v[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
     const int32_t t[6] = {0, 1, 2, 0, 2, 3};
     const int32_t m[2] = {static_cast<int32_t>(material), static_cast<int32_t>(material)};
@@ -23,6 +23,7 @@ inline void add_quad(Scene& scene, const char* name, glm::vec3 a, glm::vec3 b, g
     mesh.triangles = t;
     mesh.triangle_count = 2;
     mesh.material_ids = m;
+    mesh.transform = transform;
     scene.add_mesh(mesh);
 }
 
@@ -93,8 +94,7 @@ inline glm::mat4 perspective(float fov_y_degrees, float aspect, float near, floa
     return p;
 }
 
-inline Camera look_at(glm::vec3 eye, glm::vec3 target, int width, int height, float fov_y = 40.0f,
-                      glm::vec3 up = {0, 0, 1}, float near = 0.1f) {
+inline glm::mat4 look_at_matrix(glm::vec3 eye, glm::vec3 target, glm::vec3 up = {0, 0, 1}) {
     const glm::vec3 forward = glm::normalize(target - eye);
     const glm::vec3 right = glm::normalize(glm::cross(forward, up));
     const glm::vec3 true_up = glm::cross(right, forward);
@@ -103,13 +103,20 @@ inline Camera look_at(glm::vec3 eye, glm::vec3 target, int width, int height, fl
     to_world[1] = glm::vec4(true_up, 0.0f);
     to_world[2] = glm::vec4(-forward, 0.0f);
     to_world[3] = glm::vec4(eye, 1.0f);
-    return Camera(to_world, perspective(fov_y, static_cast<float>(width) / height, near, 1000.0f * near), width, height);
+    return to_world;
+}
+
+inline Camera look_at(glm::vec3 eye, glm::vec3 target, int width, int height, float fov_y = 40.0f,
+                      glm::vec3 up = {0, 0, 1}, float near = 0.1f) {
+    return Camera(look_at_matrix(eye, target, up), perspective(fov_y, static_cast<float>(width) / height, near, 1000.0f * near),
+                  width, height);
 }
 
 inline Camera cornell_camera(int width, int height) { return look_at({0, -3.9f, 1}, {0, 0, 1}, width, height); }
 
 // An axis-aligned closed box [lo, hi] as 12 triangles (faces wound outwards; materials are double-sided).
-inline void add_box(Scene& scene, const char* name, glm::vec3 lo, glm::vec3 hi, uint32_t material) {
+inline void add_box(Scene& scene, const char* name, glm::vec3 lo, glm::vec3 hi, uint32_t material,
+                    const glm::dmat4& transform = glm::dmat4(1.0)) {
     const glm::vec3 c[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
                             {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
     const int q[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
@@ -128,6 +135,7 @@ inline void add_box(Scene& scene, const char* name, glm::vec3 lo, glm::vec3 hi, 
     mesh.triangles = t.data();
     mesh.triangle_count = t.size() / 3;
     mesh.material_ids = m.data();
+    mesh.transform = transform;
     scene.add_mesh(mesh);
 }
 
@@ -160,6 +168,37 @@ inline void build_transformed_cornell_box(Scene& scene, float scale, glm::vec3 o
 inline Camera transformed_cornell_camera(float scale, glm::vec3 offset, int width, int height) {
     return look_at(offset + scale * glm::vec3(0, -3.9f, 1), offset + scale * glm::vec3(0, 0, 1), width, height, 40.0f,
                    {0, 0, 1}, 0.1f * scale);
+}
+
+// The Cornell box above (scale 1) the way Blender gives a scene moved by `offset`: every mesh in object space,
+// placed by an object-to-world transform whose translation is `offset`; the lamp and the camera at offset +
+// their place, in double. Without the box's ties (see SameImageMovedBy1e3And1e5): the glass block stands 1 cm
+// above the floor, and the camera is off the box's symmetry plane. in_vertices: the offset is in the vertices
+// instead (float32, rounded to its spacing there), the transforms are the identity.
+inline void build_moved_cornell_box(Scene& scene, glm::dvec3 offset, bool in_vertices = false) {
+    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.75f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t red = scene.add_material({"red", MaterialKind::diffuse, glm::vec3(0.75f, 0.1f, 0.1f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t glass = scene.add_material({"glass", MaterialKind::glass, glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
+    // The lamp first: the render origin moves as the meshes are added, and re-expresses it (scene.h).
+    scene.add_light(point_light("lamp", {}, 100.0f), offset + glm::dvec3(0.0, 0.0, 1.8f));
+    glm::dmat4 moved(1.0);
+    if (!in_vertices) moved[3] = glm::dvec4(offset, 1.0);
+    auto P = [&](float x, float y, float z) {
+        return in_vertices ? glm::vec3(offset + glm::dvec3(x, y, z)) : glm::vec3(x, y, z);
+    };
+    add_quad(scene, "floor", P(-1, -1, 0), P(1, -1, 0), P(1, 1, 0), P(-1, 1, 0), white, moved);
+    add_quad(scene, "ceiling", P(-1, -1, 2), P(-1, 1, 2), P(1, 1, 2), P(1, -1, 2), white, moved);
+    add_quad(scene, "back", P(-1, 1, 0), P(1, 1, 0), P(1, 1, 2), P(-1, 1, 2), white, moved);
+    add_quad(scene, "left", P(-1, -1, 0), P(-1, 1, 0), P(-1, 1, 2), P(-1, -1, 2), red, moved);
+    add_quad(scene, "right", P(1, -1, 0), P(1, -1, 2), P(1, 1, 2), P(1, 1, 0), white, moved);
+    add_box(scene, "glass_block", P(-0.5f, -0.2f, 0.01f), P(0.0f, 0.3f, 0.6f), glass, moved);
+}
+
+inline Camera moved_cornell_camera(glm::dvec3 offset, int width, int height) {
+    const glm::vec3 eye(0.11f, -3.9f, 1.07f);
+    glm::dmat4 to_world(look_at_matrix(eye, {0, 0, 1}));
+    to_world[3] = glm::dvec4(offset + glm::dvec3(eye), 1.0);
+    return Camera(to_world, perspective(40.0f, static_cast<float>(width) / height, 0.1f, 100.0f), width, height);
 }
 
 }  // namespace ps::test

@@ -155,6 +155,8 @@ class SceneCache:
             scene = self.scene
             for name in moved:
                 scene.set_instance_transform(self._instance_ids[name], layout[name][1])
+            if moved:
+                scene.fit_origin()   # objects moved far keep their precision (the core's render origin)
             report.moved = len(moved)
             self.transform_updates += report.moved
             if lights_changed:

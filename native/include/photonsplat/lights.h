@@ -19,7 +19,7 @@ struct Light {
     std::string name;
     LightKind kind = LightKind::point;
     glm::vec3 value{0.0f};       // point: intensity; sun: irradiance; area: radiance (RGB)
-    glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle
+    glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle. In Scene::lights(): render space
     glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels; spot: the cone's axis (unit)
     float radius = 0.0f;         // point and spot, >= 0
     float angle = 0.0f;          // sun only, full angular diameter in radians, in [0, π)

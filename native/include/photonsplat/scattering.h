@@ -18,6 +18,7 @@ struct SurfacePoint {
     bool entering;               // the ray hit the front face (the triangle's winding normal faced the ray)
     const Material* material;
     glm::vec3 color;             // the material's colour here: its texture at the hit's UV, else Material::color
+    float rounding_scale;        // Instance::rounding_scale of the surface hit, for offset_ray_origin
 };
 
 // Resolves a hit (instance + triangle + barycentrics) to a world-space surface point: position, normals
@@ -27,7 +28,10 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
 
 // A ray origin just off the surface on the side of `normal`, robust at any scale (the integer-ulp offset of
 // Wächter & Binder, Ray Tracing Gems ch. 6), so rays neither re-hit their surface nor tunnel through thin walls.
-glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& normal);
+// The offset is 256 ulps of each coordinate of p, or 8 ulps of `rounding_scale` where that is larger: a mesh
+// whose object-space vertices are large (far from their object's origin) gives hit points rounded at that size
+// even where the render-space p is small (scene.h), and the ray must start beyond that rounding.
+glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& normal, float rounding_scale = 0.0f);
 
 // Orthonormal basis around a unit vector (Duff et al. 2017).
 void orthonormal_basis(const glm::vec3& n, glm::vec3& b1, glm::vec3& b2);

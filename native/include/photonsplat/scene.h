@@ -2,8 +2,20 @@
 // transform each; Embree instancing, so a thousand copies of a mesh cost one mesh), materials, textures,
 // lights and a background. Everything is validated on entry (add_*), so later stages never meet NaNs or bad
 // indices. Degenerate triangles (zero area, repeated vertices) are dropped and counted, not treated as errors.
+//
+// World space and render space. Transforms and positions arrive in the user's world space, in double (Blender's
+// float32 matrices convert exactly). The scene keeps them, and hands every later stage float coordinates in
+// *render space*: world minus origin(), a point in double near the middle of the placed geometry. Far from the
+// world origin float32 cannot hold positions finely (7.8 mm apart at 1e5), but render-space coordinates stay
+// about the scene's size wherever the scene is, so a scene moved by 1e5 renders like the same scene at the
+// origin: the transform's large translation is subtracted in double, before anything becomes float. (A mesh
+// whose *vertices* are far from its object origin arrives already rounded in float32 and keeps that error.)
+// Render-space data are: Instance::to_world, lights() positions, bounds_min/max and world_triangle.
+// Cameras are given in world space too; Camera::relative_to(origin()) puts one in render space, which every
+// entry point that takes a Scene and a Camera does first.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -34,7 +46,7 @@ struct MeshInput {
     const float* uvs = nullptr;            // optional texture coordinates, see uvs_per_corner
     bool uvs_per_corner = false;           // false: vertex_count × 2; true: triangle_count × 3 corners × 2
     const int32_t* material_ids = nullptr; // optional, triangle_count scene material indices (default 0)
-    glm::mat4 transform{1.0f};             // object → world; used by add_mesh only
+    glm::dmat4 transform{1.0};             // object → world; used by add_mesh only
 };
 
 // Which rays see an instance (Cycles' object ray visibility); a bit set for a ray's kind = the ray can hit it.
@@ -46,9 +58,16 @@ enum RayVisibility : uint32_t {
 };
 
 // A mesh in object space, as validated and kept by the scene. Only non-degenerate triangles are kept.
+// Positions (and the bounds) are kept relative to `centre`: 0 for ordinary meshes (their coordinates are kept
+// bit for bit), and for a mesh more than 64 of its sizes away from its object origin the centre of its box on
+// the same power-of-two grid as Scene::origin(). Such a mesh (vertices far out, float32 input) then has small
+// coordinates too (the subtraction is exact: both are multiples of float's spacing there), and instances place
+// it through their transform times a translation by `centre`, taken in double. What stays is the input's own
+// rounding (7.8 mm steps at 1e5).
 struct MeshData {
     std::string name;
-    std::vector<glm::vec3> positions;
+    glm::vec3 centre{0.0f};
+    std::vector<glm::vec3> positions;   // object space minus centre
     std::vector<uint32_t> indices;      // 3 per triangle
     std::vector<glm::vec3> normals;     // 3 per triangle (corner shading normals); empty: flat shading
     std::vector<glm::vec2> uvs;         // 3 per triangle; empty: no UV map (every UV is 0, 0)
@@ -63,12 +82,18 @@ struct MeshData {
 struct Instance {
     uint32_t mesh;
     std::string name;          // for messages (the Blender object or instance)
-    glm::mat4 to_world{1.0f};
+    glm::mat4 to_world{1.0f};  // object → render space (world − Scene::origin()), what Embree and shading use
+    // The world-space translation as given (the linear part needs no more than to_world's float: a rotation or
+    // scale rounds the same wherever the object is).
+    glm::dvec3 world_translation{0.0};
     glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
+    // The largest coordinate of the mesh's object-space box through the linear part: hit points on this
+    // instance carry float rounding of this size, whatever their render-space coordinates (offset_ray_origin).
+    float rounding_scale = 0.0f;
     uint32_t visibility = kAllRays;   // RayVisibility bits
 };
 
-// One triangle in world space (corner positions only), e.g. for sampling emissive surfaces.
+// One placed triangle in render space (corner positions only), e.g. for sampling emissive surfaces.
 struct WorldTriangle {
     glm::vec3 v0, v1, v2;
 };
@@ -85,13 +110,23 @@ public:
     uint32_t add_mesh_data(const MeshInput& mesh);     // object space, not placed anywhere yet; returns its id
     // Places mesh `mesh` in the world; returns the instance id. A transform that flattens the mesh (zero
     // scale) is accepted: the instance then covers nothing and its triangles are counted as dropped.
-    uint32_t add_instance(uint32_t mesh, const glm::mat4& to_world, const std::string& name = "",
+    // May move origin() (see recentre), which re-expresses every instance and light in the new render space.
+    uint32_t add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name = "",
                           uint32_t visibility = kAllRays);
     // Moves an instance. Cost: O(1) here, then one refit of the top-level BVH (all instances, no triangle
-    // touched) at the next render. Not to be called while a render of this scene runs.
-    void set_instance_transform(uint32_t instance, const glm::mat4& to_world);
+    // touched) at the next render. Keeps origin() (moving n instances one by one must not cost O(n · scene));
+    // fit_origin() after the moves puts it where a new scene would have it. Not to be called while a render of
+    // this scene runs.
+    void set_instance_transform(uint32_t instance, const glm::dmat4& to_world);
+    // Moves origin() to where the instances are now (O(instances)): after it, the scene renders bit for bit as a
+    // scene built anew with the same content. Cheap when nothing moved far: the origin only changes when the
+    // instances' box grows or shifts by about its size. Not to be called while a render of this scene runs.
+    void fit_origin();
     void add_mesh(const MeshInput& mesh);              // add_mesh_data + add_instance(mesh.transform)
+    // Adds a light; its position (point, spot: centre; area: centre) is light.position, in world space, or
+    // `world_position` in double where given (light.position is then not read).
     void add_light(const Light& light);
+    void add_light(const Light& light, const glm::dvec3& world_position);
     // Removes every light, so that moved or edited lights can be added again without rebuilding the meshes or
     // the BVH (lights are read afresh by each render). Not to be called while a render of this scene runs.
     void clear_lights();
@@ -99,7 +134,7 @@ public:
 
     const std::vector<Material>& materials() const { return materials_; }
     const std::vector<Texture>& textures() const { return textures_; }
-    const std::vector<Light>& lights() const { return lights_; }
+    const std::vector<Light>& lights() const { return lights_; }  // positions in render space
     const std::vector<MeshData>& meshes() const { return meshes_; }
     const std::vector<Instance>& instances() const { return instances_; }
     glm::vec3 background() const { return background_; }
@@ -108,9 +143,13 @@ public:
     size_t stored_triangle_count() const;  // triangles held in memory: each mesh once
     size_t bytes() const;                  // meshes + textures held by the scene (the BVH: ray_tracer().bytes())
 
-    WorldTriangle world_triangle(uint32_t instance, uint32_t triangle) const;
+    // The world point that render space is relative to: render = world − origin(). 0 for any scene whose
+    // geometry's bounds hold the world origin (so such scenes render exactly as they would without it).
+    glm::dvec3 origin() const { return origin_; }
 
-    // World-space bounds of all geometry (empty scene: a unit box at the origin).
+    WorldTriangle world_triangle(uint32_t instance, uint32_t triangle) const;  // render space
+
+    // Render-space bounds of all geometry (empty scene: a unit box at the render origin).
     glm::vec3 bounds_min() const;
     glm::vec3 bounds_max() const;
 
@@ -121,16 +160,25 @@ private:
     std::vector<Material> materials_;
     std::vector<Texture> textures_;
     std::vector<Light> lights_;
+    std::vector<glm::dvec3> light_positions_;  // world space, one per light
     std::vector<MeshData> meshes_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};
+    glm::dvec3 origin_{0.0};
+    // World-space box of the instances as placed by add_instance (and as they are after fit_origin), in double.
+    glm::dvec3 placed_min_{std::numeric_limits<double>::infinity()};
+    glm::dvec3 placed_max_{-std::numeric_limits<double>::infinity()};
     size_t dropped_in_meshes_ = 0;
     mutable std::unique_ptr<RayTracer> ray_tracer_;
     // Instances moved since the ray tracer was built: applied to it before its next use.
     mutable std::vector<uint32_t> moved_instances_;
 
     bool instance_is_flat(const Instance& instance) const;
-    std::pair<glm::vec3, glm::vec3> world_bounds() const;  // bounds_min/max before their empty-scene fallback
+    std::pair<glm::vec3, glm::vec3> render_bounds() const;  // bounds_min/max before their empty-scene fallback
+    // Sets the instance's transforms from `to_world` (world space) and its rounding_scale.
+    void place(Instance& instance, const glm::dmat4& to_world) const;
+    void include_in_placed_box(const Instance& instance);
+    bool recentre();  // origin_ from placed_min_/max_; re-expresses instances and lights if it moved (true)
 };
 
 }  // namespace ps

@@ -31,11 +31,12 @@ struct ViewSample {
     uint32_t pixel;            // y * width + x, y = 0 at the top
     uint32_t flags;            // ViewSampleFlags
     float depth;               // view depth of the FIRST hit of the pixel's camera ray (for cluster keys)
+    float rounding_scale;      // SurfacePoint::rounding_scale, for rays leaving the sample (offset_ray_origin)
 };
 
 struct ViewSamples {
     int width = 0, height = 0;
-    glm::vec3 origin{0.0f};             // world position all sample positions are relative to (the camera)
+    glm::vec3 origin{0.0f};             // render-space position (scene.h) sample positions are relative to (the camera)
     std::vector<ViewSample> samples;    // at most one per pixel, in pixel order
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0

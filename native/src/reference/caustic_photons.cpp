@@ -82,7 +82,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
                 power *= step.weight / keep;
                 const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-                ray = Ray{offset_ray_origin(s.position, side), step.direction};
+                ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             }
         }
     });

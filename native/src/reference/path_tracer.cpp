@@ -52,6 +52,7 @@ ViewSample vertex_at(const SurfacePoint& s, const glm::vec3& wo, const glm::vec3
     v.position = s.position - origin;
     v.normal = s.geometric_normal;
     v.shading_normal = s.shading_normal;
+    v.rounding_scale = s.rounding_scale;
     v.wo = wo;
     v.throughput = throughput;
     if (s.material->is_glossy()) {
@@ -109,7 +110,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const ViewSample& v, const g
         const glm::vec3 f(sample_brdf(v, in.wi));
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
-        if (tracer.occluded(Ray{offset_ray_origin(x, v.normal), in.wi}, 0.0f, in.distance * (1.0f - 1e-4f))) continue;
+        if (tracer.occluded(Ray{offset_ray_origin(x, v.normal, v.rounding_scale), in.wi}, 0.0f, in.distance * (1.0f - 1e-4f))) continue;
         const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(v, in.wi));
         sum += f * in.value * (cos_shading * w);
     }
@@ -172,7 +173,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             const SpecularStep step = scatter_specular(m, s, ray.direction, rng.uniform());
             throughput *= step.weight;
             const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-            ray = Ray{offset_ray_origin(s.position, side), step.direction};
+            ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             last.specular_since = true;
         } else {
             const ViewSample v = vertex_at(s, -ray.direction, origin, throughput);
@@ -183,7 +184,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             const BsdfSample b = sample_bsdf(v, u1, u2);
             if (!(b.pdf > 0.0f)) break;
             throughput *= b.weight;
-            ray = Ray{offset_ray_origin(s.position, s.geometric_normal), b.direction};
+            ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), b.direction};
             last = LastScatter{true, false, s.position, b.pdf};
         }
         const float keep = std::max({throughput.x, throughput.y, throughput.z});

@@ -59,9 +59,10 @@ float default_caustic_radius(const Scene& scene, uint64_t photons_per_pass) {
     return 0.5f * default_radius(scene, photons_per_pass);
 }
 
-ReferenceResult render_reference(const Scene& scene, const Camera& camera, const ReferenceSettings& settings,
+ReferenceResult render_reference(const Scene& scene, const Camera& world_camera, const ReferenceSettings& settings,
                                  RenderControl& control) {
     validate(settings);
+    const Camera camera = world_camera.relative_to(scene.origin());  // paths are traced in render space
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     {

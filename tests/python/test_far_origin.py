@@ -1,0 +1,45 @@
+"""Positions and transforms reach the core in double (issue 6): a light 1 cm above a quad, both moved by 1e5,
+lights the quad as at the origin. In float32 the light's height at 1e5 would round to 7.8 mm or 15.6 mm (the
+spacing of float32 there), and the irradiance under it would change by 64 % or −59 %."""
+import numpy as np
+import pytest
+
+import photonsplat as ps
+
+QUAD_V = np.array([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]], np.float32)
+QUAD_T = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+FAR = np.array([1e5, -1e5, 1e5])
+
+
+def translate(offset):
+    m = np.eye(4)
+    m[:3, 3] = offset
+    return m
+
+
+def direct_light(kind, offset):
+    scene = ps.Scene()
+    scene.add_material(name="white", color=(0.8, 0.8, 0.8))
+    scene.add_instance(scene.add_mesh_data("quad", QUAD_V, QUAD_T), translate(offset))
+    above = offset + np.array([0.0, 0.0, 0.01])          # float64 throughout
+    if kind == "point":
+        scene.add_point_light("lamp", position=above, intensity=(1.0, 1.0, 1.0))
+    elif kind == "spot":
+        scene.add_spot_light("lamp", position=above, direction=(0, 0, -1), intensity=(1.0, 1.0, 1.0), spot_size=3.0)
+    else:
+        # It emits towards cross(u, v) = −z: down onto the quad.
+        scene.add_area_light("lamp", center=above, axis_u=(0.002, 0, 0), axis_v=(0, -0.002, 0),
+                             radiance=(1e5, 1e5, 1e5))
+    projection = np.diag([2.0, 2.0, -2.0 / 100.0, 1.0])
+    projection[2, 3] = -1.0
+    camera = ps.Camera(to_world=translate(offset + np.array([0.0, 0.0, 10.0])), projection=projection,
+                       width=16, height=16)
+    _, _, passes = ps.render(scene, camera, ps.RenderSettings(photons=1000, radius=0.05, seed=2), passes=True)
+    return passes["direct"].astype(np.float64)
+
+
+@pytest.mark.parametrize("kind", ["point", "spot", "area"])
+def test_a_light_1cm_above_a_quad_moved_by_1e5_lights_it_as_at_the_origin(kind):
+    at_origin, far = direct_light(kind, np.zeros(3)), direct_light(kind, FAR)
+    assert at_origin.max() > 0.0
+    assert np.abs(far - at_origin).sum() / np.abs(at_origin).sum() < 1e-3
