@@ -214,6 +214,10 @@ PYBIND11_MODULE(_core, m) {
                        "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
         .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
                        "Emit sun photons where pilot paths found them stored; unbiased (default True)")
+        .def_readwrite("aimed_photons", &ps::RenderSettings::aimed_photons,
+                       "Extra photons per pass aimed at mirror and glass objects (point, spot and area lights), as a "
+                       "fraction of photons; they add caustic photons only, weighted so the image stays unbiased. "
+                       "0 = off.")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -225,7 +229,7 @@ PYBIND11_MODULE(_core, m) {
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
               << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
-              << ", guide_photons=" << (s.guide_photons ? "True" : "False")
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ", aimed_photons=" << s.aimed_photons
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
               << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
             return o.str();
