@@ -29,7 +29,7 @@ struct RenderSettings {
     // Extra photons per pass aimed at mirror and glass objects from point, spot and area lights, as a fraction
     // of `photons`; they only add caustic photons (caustic_aim.h). 0 = off; nothing is added without mirrors
     // or glass.
-    float aimed_photons = 0.25f;
+    float aimed_photons = 0.1f;
     bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
     // Progressive rendering (progressive.h): passes of new photons, jittered camera rays and a shrinking radius,
