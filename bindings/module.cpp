@@ -36,7 +36,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
                                  float plane_distance, const std::string& kernel, int directional_level,
                                  int64_t passes, double time_limit, float alpha, bool guide_photons,
                                  bool caustics_pass, bool transparent,
-                                 uint64_t memory_budget) {
+                                 uint64_t memory_budget, float aimed_photons) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -56,6 +56,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.guide_photons = guide_photons;
     s.caustics_pass = caustics_pass;
     s.transparent = transparent;
+    s.aimed_photons = aimed_photons;
     ps::validate(s);
     return s;
 }
@@ -186,7 +187,7 @@ PYBIND11_MODULE(_core, m) {
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
              "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
              "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
-             "transparent"_a = false, "memory_budget"_a = 0)
+             "transparent"_a = false, "memory_budget"_a = 0, "aimed_photons"_a = ps::RenderSettings().aimed_photons)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
