@@ -17,6 +17,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -335,39 +336,36 @@ struct BuildNode {
     uint32_t sample_begin = 0, sample_end = 0;
 };
 
-}  // namespace
+// A leaf's regular samples (finite position and normal, as the directional method counts them) as the parts
+// its summary describes. Normals are summed as they are (unit for any real sample); a zero normal leaves the
+// cone unbounded.
+struct OrientedPoint {
+    glm::dvec3 position, normal;
+};
 
-// A leaf's regular samples (finite position and normal, as the directional method counts them) summarised:
-// two passes over samples that are in cache. Normals are summed as they are (unit for any real sample); a zero
-// normal leaves the cone unbounded.
-LeafSummary summarise_leaf(const ViewSamples& samples, const std::vector<uint32_t>& order, uint32_t begin,
-                           uint32_t end) {
-    const auto regular = [](const ViewSample& s) { return is_finite(s.position) && is_finite(s.normal); };
+// One part: the points `members` (indices into `points`), around the normalised sum of their normals. Passes
+// over a handful of points that are in cache.
+LeafSummary summarise_part(const std::vector<OrientedPoint>& points, const std::vector<uint32_t>& members) {
     glm::dvec3 position_sum(0.0), normal_sum(0.0);
-    uint32_t count = 0;
-    for (uint32_t k = begin; k != end; ++k) {
-        const ViewSample& s = samples.samples[order[k]];
-        if (!regular(s)) continue;
-        position_sum += glm::dvec3(s.position);
-        normal_sum += glm::dvec3(s.normal);
-        ++count;
+    for (const uint32_t i : members) {
+        position_sum += points[i].position;
+        normal_sum += points[i].normal;
     }
     LeafSummary summary;
-    summary.count = count;
-    if (count == 0) return summary;
-    const glm::dvec3 centroid = position_sum / double(count);
+    summary.count = uint32_t(members.size());
+    if (members.empty()) return summary;
+    const double count = double(members.size());
+    const glm::dvec3 centroid = position_sum / count;
     const double sum_length = glm::length(normal_sum);
     const bool has_axis = sum_length > 1e-3 * count;  // as the directional method: else the normals cancel
     const glm::dvec3 axis = has_axis ? normal_sum / sum_length : glm::dvec3(0.0);
     double radius = 0.0, slab = 0.0, min_cos = 1.0;
-    for (uint32_t k = begin; k != end; ++k) {
-        const ViewSample& s = samples.samples[order[k]];
-        if (!regular(s)) continue;
-        const glm::dvec3 d = glm::dvec3(s.position) - centroid;
+    for (const uint32_t i : members) {
+        const glm::dvec3 d = points[i].position - centroid;
         radius = std::max(radius, glm::length(d));
         slab = std::max(slab, std::fabs(glm::dot(axis, d)));
-        const double length = glm::length(glm::dvec3(s.normal));
-        min_cos = std::min(min_cos, length > 0.0 ? glm::dot(axis, glm::dvec3(s.normal)) / length : -1.0);
+        const double length = glm::length(points[i].normal);
+        min_cos = std::min(min_cos, length > 0.0 ? glm::dot(axis, points[i].normal) / length : -1.0);
     }
     // Margins for storing in float: the centroid moves by ~|centroid|·6e-8, the axis by ~1e-7 rad.
     summary.centroid = glm::vec3(centroid);
@@ -379,6 +377,81 @@ LeafSummary summarise_leaf(const ViewSamples& samples, const std::vector<uint32_
     summary.cone_angle = has_axis && angle < kPi ? float(angle) : float(kPi);
     return summary;
 }
+
+// Splits `members` in two by orientation as the directional method splits a node (seeds: the normal farthest
+// from their mean `mean`, then the one farthest from that; one k-means step). False when a side stays empty.
+bool split_by_orientation(const std::vector<OrientedPoint>& points, const std::vector<uint32_t>& members,
+                          const glm::dvec3& mean, std::vector<uint32_t>& first, std::vector<uint32_t>& second) {
+    const auto farthest_from = [&](const glm::dvec3& d) {
+        uint32_t best = members[0];
+        for (const uint32_t i : members)
+            if (glm::dot(d, points[i].normal) < glm::dot(d, points[best].normal)) best = i;
+        return points[best].normal;
+    };
+    const glm::dvec3 seed0 = farthest_from(mean);
+    const glm::dvec3 seed1 = farthest_from(seed0);
+    glm::dvec3 sums[2] = {glm::dvec3(0.0), glm::dvec3(0.0)};
+    for (const uint32_t i : members)
+        sums[glm::dot(points[i].normal, seed1) > glm::dot(points[i].normal, seed0) ? 1 : 0] += points[i].normal;
+    if (!(glm::length(sums[0]) > 0.0) || !(glm::length(sums[1]) > 0.0)) return false;
+    const glm::dvec3 axis0 = glm::normalize(sums[0]), axis1 = glm::normalize(sums[1]);
+    first.clear();
+    second.clear();
+    for (const uint32_t i : members)
+        (glm::dot(points[i].normal, axis1) > glm::dot(points[i].normal, axis0) ? second : first).push_back(i);
+    return !first.empty() && !second.empty();
+}
+
+// Appends the parts of `members`: one part when their normals lie within kNarrowLeafAngle of their mean (or
+// after kLeafSplitLevels splits), else the parts of each side of a split by orientation. Sets part_of_point[i]
+// of each member to its part's number within the leaf, whose parts start at out[leaf_start].
+void add_leaf_parts(const std::vector<OrientedPoint>& points, const std::vector<uint32_t>& members, int level,
+                    size_t leaf_start, std::vector<uint8_t>& part_of_point, std::vector<LeafSummary>& out) {
+    const LeafSummary whole = summarise_part(points, members);
+    std::vector<uint32_t> first, second;
+    if (level < kLeafSplitLevels && whole.count >= 2 && !(whole.cone_angle < kNarrowLeafAngle)) {
+        const glm::dvec3 sum(whole.normal_sum);
+        const glm::dvec3 mean = glm::length(sum) > 0.0 ? glm::normalize(sum) : points[members[0]].normal;
+        if (split_by_orientation(points, members, mean, first, second)) {
+            add_leaf_parts(points, first, level + 1, leaf_start, part_of_point, out);
+            add_leaf_parts(points, second, level + 1, leaf_start, part_of_point, out);
+            return;
+        }
+    }
+    for (const uint32_t i : members) part_of_point[i] = uint8_t(out.size() - leaf_start);
+    out.push_back(whole);
+}
+
+// A leaf's summary, appended to `out`: one part, or up to 2^kLeafSplitLevels split by orientation when its
+// normals spread to kNarrowLeafAngle or more (a leaf across a crease: its tile and depth slice hold two walls;
+// a corner, three). Done on the leaf's few samples while they are in cache, so that the directional method can
+// split a node across the crease by whole parts instead of reading the node's samples again. Writes each
+// sample's part number to sample_part[begin, end) (0 for a sample that is not regular). `points`, `members`
+// and `part_of_point` are scratch space. Returns the number of parts appended (at least 1).
+uint32_t summarise_leaf(const ViewSamples& samples, const std::vector<uint32_t>& order, uint32_t begin,
+                        uint32_t end, std::vector<OrientedPoint>& points, std::vector<uint32_t>& members,
+                        std::vector<uint8_t>& part_of_point, std::vector<uint8_t>& sample_part,
+                        std::vector<LeafSummary>& out) {
+    points.clear();
+    members.clear();
+    for (uint32_t k = begin; k != end; ++k) {
+        const ViewSample& s = samples.samples[order[k]];
+        if (!is_finite(s.position) || !is_finite(s.normal)) continue;
+        members.push_back(uint32_t(points.size()));
+        points.push_back({glm::dvec3(s.position), glm::dvec3(s.normal)});
+    }
+    part_of_point.assign(points.size(), 0);
+    const size_t before = out.size();
+    add_leaf_parts(points, members, 0, before, part_of_point, out);
+    size_t point = 0;
+    for (uint32_t k = begin; k != end; ++k) {
+        const ViewSample& s = samples.samples[order[k]];
+        sample_part[k] = is_finite(s.position) && is_finite(s.normal) ? part_of_point[point++] : 0;
+    }
+    return uint32_t(out.size() - before);
+}
+
+}  // namespace
 
 ClusterKeyParams ClusterKeyParams::from_camera(const Camera& camera) {
     ClusterKeyParams params;
@@ -479,16 +552,43 @@ ClusterHierarchy build_cluster_hierarchy(const ViewSamples& samples, const Clust
         i = j;
     }
     const size_t leaf_count = build.size();
-    if (options.leaf_summaries) hierarchy.leaf_summaries.resize(leaf_count);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaf_count, 256), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t l = range.begin(); l != range.end(); ++l) {
-            for (uint32_t k = build[l].sample_begin; k != build[l].sample_end; ++k)
-                build[l].box.add(samples.samples[hierarchy.sample_order[k]].position);
-            if (options.leaf_summaries)  // the leaf's samples were just read: summarising them now is cheap
-                hierarchy.leaf_summaries[l] = summarise_leaf(samples, hierarchy.sample_order, build[l].sample_begin,
-                                                             build[l].sample_end);
+    // Leaves are boxed (and summarised) in fixed chunks, each appending its leaves' parts to its own list, so
+    // that the lists joined in chunk order are in leaf order whatever the thread count.
+    constexpr size_t kLeavesPerChunk = 256;
+    const size_t chunks = (leaf_count + kLeavesPerChunk - 1) / kLeavesPerChunk;
+    std::vector<std::vector<LeafSummary>> chunk_parts(options.leaf_summaries ? chunks : 0);
+    std::vector<uint32_t> part_count(options.leaf_summaries ? leaf_count : 0);
+    struct Scratch {
+        std::vector<OrientedPoint> points;
+        std::vector<uint32_t> members;
+        std::vector<uint8_t> part_of_point;
+    };
+    if (options.leaf_summaries) hierarchy.sample_part.resize(n);
+    tbb::enumerable_thread_specific<Scratch> scratch;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks), [&](const tbb::blocked_range<size_t>& range) {
+        Scratch& local = scratch.local();
+        for (size_t chunk = range.begin(); chunk != range.end(); ++chunk) {
+            for (size_t l = chunk * kLeavesPerChunk; l != std::min(leaf_count, (chunk + 1) * kLeavesPerChunk); ++l) {
+                for (uint32_t k = build[l].sample_begin; k != build[l].sample_end; ++k)
+                    build[l].box.add(samples.samples[hierarchy.sample_order[k]].position);
+                if (options.leaf_summaries)  // the leaf's samples were just read: summarising them now is cheap
+                    part_count[l] = summarise_leaf(samples, hierarchy.sample_order, build[l].sample_begin,
+                                                   build[l].sample_end, local.points, local.members,
+                                                   local.part_of_point, hierarchy.sample_part, chunk_parts[chunk]);
+            }
         }
     });
+    if (options.leaf_summaries) {
+        hierarchy.leaf_summary_begin.resize(leaf_count + 1);
+        uint32_t parts = 0;
+        for (size_t l = 0; l < leaf_count; ++l) hierarchy.leaf_summary_begin[l] = parts, parts += part_count[l];
+        hierarchy.leaf_summary_begin[leaf_count] = parts;
+        hierarchy.leaf_summaries.reserve(parts);
+        for (std::vector<LeafSummary>& list : chunk_parts) {
+            hierarchy.leaf_summaries.insert(hierarchy.leaf_summaries.end(), list.begin(), list.end());
+            std::vector<LeafSummary>().swap(list);
+        }
+    }
 
     // Parents, one level (3 key bits) at a time, until one node is left. Every key reaches 0 after 22 shifts.
     std::vector<uint32_t> level(leaf_count);

@@ -141,7 +141,12 @@ double predict_hierarchy_bytes(size_t samples) {
     return 2.0 * s * double(sizeof(ClusterNode)) + 2.0 * s * double(sizeof(uint32_t));  // nodes; order + leaves
 }
 
-double predict_leaf_summary_bytes(size_t samples) { return double(samples) * double(sizeof(LeafSummary)); }
+// Every part holds a sample, so there are at most as many parts (and leaves) as samples; the parts are held twice
+// while the chunks' lists are joined. Per sample: its part number, and per leaf a part count and first part.
+double predict_leaf_summary_bytes(size_t samples) {
+    return 2.0 * double(samples) * double(sizeof(LeafSummary)) + double(samples) * (2.0 * sizeof(uint32_t) + 1.0) +
+           double(sizeof(uint32_t));
+}
 
 double predict_cone_bytes(size_t samples) { return 2.0 * double(samples) * double(sizeof(NormalCone) + 1); }
 

@@ -340,7 +340,8 @@ TEST(Directional, SameBitsForAnyThreadCount) {
 
 // Flat cut nodes are described from the leaves' summaries (ClusterBuildOptions::leaf_summaries) instead of their
 // samples. The facet is the same (centroid, axis, sample count) and its bounds only wider, so the image barely
-// moves; nodes across a crease split by whole leaves, unless a leaf itself lies across it.
+// moves; nodes across a crease split by whole leaf parts (a leaf across it is summarised as parts split by
+// orientation), unless a leaf holds more orientations than it has parts.
 TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
     std::mt19937 rng(41);
     ClusterBuildOptions with_summaries;
@@ -358,12 +359,22 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
         ViewSamples planes = random_planes_view(rng, 96, 80);
         PhotonMap near = photons_near_samples(planes, 6000, 0.6f, rng);
         cases.push_back({"random planes", std::move(planes), std::move(near)});
-        // A crease down the middle, inside a column of tiles (x = 50 of 100): nodes across it are not flat.
+        // A crease down the middle, inside a column of tiles (x = 50 of 100): its leaves come in two parts.
         ViewSamples crease = plane_view(100, 64, 3.0f);
         for (ViewSample& sample : crease.samples)
             if (sample.pixel % 100 >= 50) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.6f, 0.0f, 0.8f);
         PhotonMap lit = uniform_plane_photons(crease, 20000, 3.0f, 0.5f, rng);
         cases.push_back({"crease", std::move(crease), std::move(lit)});
+        // Five orientations inside one column of tiles (x = 48, 49, 50, 51, then 52 onwards): a leaf's four parts
+        // cannot hold them apart, so the nodes over that column read their samples.
+        ViewSamples fold = plane_view(100, 64, 3.0f);
+        const glm::vec3 normals[] = {{0.6f, 0.0f, 0.8f}, {0.0f, 0.6f, 0.8f}, {-0.6f, 0.0f, 0.8f}, {0.0f, -0.6f, 0.8f}};
+        for (ViewSample& sample : fold.samples) {
+            const uint32_t x = sample.pixel % 100;
+            if (x >= 49) sample.normal = sample.shading_normal = sample.wo = normals[std::min(x - 49, 3u)];
+        }
+        PhotonMap fold_lit = uniform_plane_photons(fold, 20000, 3.0f, 0.5f, rng);
+        cases.push_back({"five orientations", std::move(fold), std::move(fold_lit)});
         // A sharper crease (53°: 27° from the mean, past kSplitAngle) on a tile boundary (x = 48 of 96): every leaf is flat, nodes across it split by leaves.
         ViewSamples aligned = plane_view(96, 64, 3.0f);
         for (ViewSample& sample : aligned.samples)
@@ -375,7 +386,8 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
         const ClusterHierarchy plain = build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height));
         const ClusterHierarchy summarised =
             build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height), with_summaries);
-        ASSERT_EQ(summarised.leaf_summaries.size(), summarised.leaves.size());
+        ASSERT_EQ(summarised.leaf_summary_begin.size(), summarised.leaves.size() + 1);
+        ASSERT_EQ(summarised.leaf_summaries.size(), summarised.leaf_summary_begin.back());
         for (int level : {0, 1, 2}) {
             SplatParams params = splat_params(0.3f, c.map, level);
             params.plane_distance_factor = 0.2f;
@@ -386,7 +398,8 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
             const double cut = summarised_stats.counters.at("directional_cut_nodes");
             EXPECT_EQ(plain_stats.counters.at("directional_summarised_cut_nodes"), 0.0);
             EXPECT_GT(flat, 0.0) << c.name << " level " << level;
-            if (std::string(c.name) == "crease") EXPECT_LT(flat, cut) << "level " << level;
+            if (std::string(c.name) == "crease") EXPECT_EQ(flat, cut) << "level " << level;
+            if (std::string(c.name) == "five orientations") EXPECT_LT(flat, cut) << "level " << level;
             if (std::string(c.name) == "tile-aligned crease") {
                 EXPECT_EQ(flat, cut) << "level " << level;
                 if (level == 2)  // nodes of 4×4 tiles (x tiles 4–7) hold both sides: split

@@ -214,10 +214,11 @@ void expect_valid_hierarchy(const ClusterHierarchy& h, const ViewSamples& vs, co
     EXPECT_GE(h.bytes(), h.nodes.size() * sizeof(ClusterNode) + 4 * (h.sample_order.size() + h.leaves.size()));
 }
 
-ClusterHierarchy build_with_threads(int threads, const ViewSamples& vs, const ClusterKeyParams& params) {
+ClusterHierarchy build_with_threads(int threads, const ViewSamples& vs, const ClusterKeyParams& params,
+                                    const ClusterBuildOptions& options = {}) {
     tbb::task_arena arena(threads);
     ClusterHierarchy h;
-    arena.execute([&] { h = build_cluster_hierarchy(vs, params); });
+    arena.execute([&] { h = build_cluster_hierarchy(vs, params, options); });
     return h;
 }
 
@@ -385,6 +386,57 @@ TEST(ClusterHierarchy, SameResultWithOneAndTwoThreads) {
     EXPECT_EQ(a.leaves, b.leaves);
     EXPECT_EQ(a.root, b.root);
     EXPECT_EQ(a.depth, b.depth);
+}
+
+// Leaf summaries (for the directional method): a leaf whose tile holds several planes is summarised as parts
+// split by orientation; every regular sample lies within the bounds of the part it is numbered with, the parts'
+// counts add up to the leaf's regular samples, and the summaries do not depend on the thread count.
+TEST(ClusterHierarchy, LeafSummaryPartsBoundTheirSamples) {
+    ClusterBuildOptions options;
+    options.leaf_summaries = true;
+    size_t split = 0;
+    for (uint32_t seed = 1; seed <= 3; ++seed) {
+        SCOPED_TRACE(seed);
+        const int w = 96 + 8 * int(seed), h = 64;
+        const ViewSamples vs = random_samples(w, h, seed);
+        const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, perspective_params(w, h), options);
+        const size_t leaves = hierarchy.leaves.size();
+        ASSERT_EQ(hierarchy.leaf_summary_begin.size(), leaves + 1);
+        ASSERT_EQ(hierarchy.leaf_summaries.size(), hierarchy.leaf_summary_begin.back());
+        ASSERT_EQ(hierarchy.sample_part.size(), hierarchy.sample_order.size());
+        for (size_t l = 0; l < leaves; ++l) {
+            const uint32_t first = hierarchy.leaf_summary_begin[l], parts = hierarchy.leaf_summary_begin[l + 1] - first;
+            ASSERT_GE(parts, 1u);
+            ASSERT_LE(parts, 1u << kLeafSplitLevels);
+            split += parts > 1;
+            const ClusterNode& leaf = hierarchy.nodes[hierarchy.leaves[l]];
+            std::vector<uint32_t> counted(parts, 0);
+            for (uint32_t k = leaf.sample_begin; k != leaf.sample_end; ++k) {
+                const ViewSample& s = vs.samples[hierarchy.sample_order[k]];
+                if (!std::isfinite(s.position.x) || !std::isfinite(s.normal.x)) continue;
+                ASSERT_LT(hierarchy.sample_part[k], parts);
+                ++counted[hierarchy.sample_part[k]];
+                const LeafSummary& part = hierarchy.leaf_summaries[first + hierarchy.sample_part[k]];
+                const glm::dvec3 axis = glm::normalize(glm::dvec3(part.normal_sum));
+                const glm::dvec3 d = glm::dvec3(s.position) - glm::dvec3(part.centroid);
+                const double angle = std::acos(std::clamp(glm::dot(axis, glm::normalize(glm::dvec3(s.normal))), -1.0, 1.0));
+                EXPECT_LE(angle, double(part.cone_angle));
+                EXPECT_LE(glm::length(d), double(part.radius));
+                EXPECT_LE(std::fabs(glm::dot(axis, d)), double(part.slab));
+            }
+            for (uint32_t p = 0; p < parts; ++p) {
+                EXPECT_EQ(hierarchy.leaf_summaries[first + p].count, counted[p]);
+                if (parts > 1) EXPECT_GT(counted[p], 0u);  // a split leaves no part empty
+            }
+        }
+        const ClusterHierarchy two = build_with_threads(2, vs, perspective_params(w, h), options);
+        EXPECT_EQ(two.leaf_summary_begin, hierarchy.leaf_summary_begin);
+        EXPECT_EQ(two.sample_part, hierarchy.sample_part);
+        ASSERT_EQ(two.leaf_summaries.size(), hierarchy.leaf_summaries.size());
+        EXPECT_EQ(0, std::memcmp(two.leaf_summaries.data(), hierarchy.leaf_summaries.data(),
+                                 hierarchy.leaf_summaries.size() * sizeof(LeafSummary)));
+    }
+    EXPECT_GT(split, 0u);  // tiles across the planes' intersections
 }
 
 TEST(ClusterHierarchy, RefusesInconsistentInput) {

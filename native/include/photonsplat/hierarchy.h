@@ -48,7 +48,14 @@ enum ClusterNodeFlags : uint8_t {
 
 // What the directional method needs of a leaf's samples, gathered while the leaf's box is built (the samples are
 // in cache then): with it, a cut node made of flat leaves is described without reading its samples again.
-// Only samples with a finite position and a finite normal count ("regular" samples).
+// Only samples with a finite position and a finite normal count ("regular" samples). A leaf whose normals spread
+// to kNarrowLeafAngle or more (its tile holds two walls of a crease, or three of a corner) is summarised as
+// parts, its samples split in two by orientation and each side again while it is that wide, up to
+// kLeafSplitLevels times; each part is a LeafSummary of its own samples. The directional method splits nodes by
+// whole parts narrower than kNarrowLeafAngle.
+constexpr float kNarrowLeafAngle = 10.0f * 3.14159265f / 180.0f;  // rad
+constexpr int kLeafSplitLevels = 2;                                // at most 4 parts per leaf
+
 struct LeafSummary {
     glm::vec3 centroid{0.0f};    // mean position of its regular samples, relative to ViewSamples::origin
     float radius = 0.0f;         // largest distance from the centroid to one of them
@@ -83,8 +90,11 @@ struct ClusterHierarchy {
     // Only when built with ClusterBuildOptions::normal_cones (else empty), index-aligned with `nodes`:
     std::vector<NormalCone> cones;        // the node's samples' geometric normals lie in its cone
     std::vector<uint8_t> node_flags;      // ClusterNodeFlags true of every sample of the node
-    // Only with ClusterBuildOptions::leaf_summaries (else empty), index-aligned with `leaves`:
+    // Only with ClusterBuildOptions::leaf_summaries (else empty): leaf l (index into `leaves`) is summarised by
+    // the parts leaf_summaries[leaf_summary_begin[l], leaf_summary_begin[l + 1]), at least one.
     std::vector<LeafSummary> leaf_summaries;
+    std::vector<uint32_t> leaf_summary_begin;  // leaves.size() + 1 entries
+    std::vector<uint8_t> sample_part;          // per sample_order entry: its part's number within its leaf
 
     bool empty() const { return nodes.empty(); }
     bool has_cones() const {
@@ -92,7 +102,10 @@ struct ClusterHierarchy {
     }
     size_t bytes() const;       // nodes, sample order, leaves: not the cones
     size_t cone_bytes() const;  // cones and node flags
-    size_t summary_bytes() const { return leaf_summaries.capacity() * sizeof(LeafSummary); }
+    size_t summary_bytes() const {
+        return leaf_summaries.capacity() * sizeof(LeafSummary) + leaf_summary_begin.capacity() * sizeof(uint32_t) +
+               sample_part.capacity();
+    }
 };
 
 // Depth slice of the cluster key (Olsson et al. 2012): k = floor(ln(z/near) / ln(1 + 2 tan(fovY/2) / tilesY)),

@@ -14,11 +14,15 @@
 //    split by orientation into two facets (two seeds, then one k-means step on the normals); any other node is
 //    one facet. A facet has its sample centroid, its normal cone, and its own bins: without the split, a corner
 //    node's centroid floats off both walls and its bins mix the photons of both, which the exact method keeps
-//    apart with its n_x·n_p test. A sample belongs to the facet whose axis is closest to its normal.
-//    Nodes are described from their leaves' summaries (built with the hierarchy,
-//    ClusterBuildOptions::leaf_summaries), with bounds that contain every sample, and split by whole leaves;
-//    only nodes with a leaf across a crease (or normals the summaries cannot bound) read their samples again.
-//    That pass, through sample_order to samples scattered over the frame, cost as much as shading all of them.
+//    apart with its n_x·n_p test.
+//    Nodes are described from the summaries of their leaves' parts (built with the hierarchy,
+//    ClusterBuildOptions::leaf_summaries; a leaf across a crease is summarised as parts split by orientation)
+//    and split by whole parts: a sample belongs to the facet its part went to, so a facet's bounds are exactly
+//    its parts' bounds. Only nodes to split that hold a part still wider than kNarrowLeafAngle (more orientations
+//    in one tile than it has parts), or whose normals the summaries cannot bound, read their samples again; a
+//    sample of theirs belongs to the facet whose axis is closest to its normal. That pass, through
+//    sample_order to samples scattered over the frame, cost as much as shading all of them; before leaves were
+//    split into parts it still took a fifth of the splat on the atrium.
 // 3. Traverse. Each photon walks down to the cut only, rejecting nodes above it by sphere-vs-box as `cluster`
 //    does. At a cut node it is deposited into each facet whose centroid is within r, with weight
 //    w = kernel_weight(centroid − p), unless the facet's normal cone shows that none of its samples could accept
@@ -51,9 +55,10 @@
 // with atomic adds. Each contribution is rounded on its own and integer addition is exact, so the sums, and the
 // image, are the same bit for bit whatever the thread count and the order photons are taken in. The unit makes
 // 2^61 steps = N_photons × the largest contribution, so no sum can overflow; a step is about 4e-19·N of a
-// photon's contribution, far below float precision. Photons are traversed in Morton order of their position
-// (which changes no sum): neighbouring photons meet the same nodes, which keeps both in cache and makes a task's
-// deposits gather on few nodes, hence few atomic adds.
+// photon's contribution, far below float precision. Photons are traversed in the photon map's order, which the
+// render makes the Morton order of their position (photons.h; any order gives the same sums): neighbouring
+// photons meet the same nodes, which keeps both in cache and makes a task's deposits gather on few nodes, hence
+// few atomic adds.
 //
 // Counters: "photon_node_tests" (box tests above the cut and facet tests at it), "node_deposits" (photon
 // deposits into a facet's bin), "photon_sample_tests" = 0 (no photon is ever tested against a sample),
@@ -96,7 +101,7 @@ constexpr int kBins = 8;
 constexpr int kSlots = 6;  // per bin: Σ w·Φ (R, G, B), then Σ w·mean(Φ)·ωi (x, y, z)
 constexpr int kBinValues = kBins * kSlots;
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
-constexpr size_t kPhotonsPerTask = 2048;         // spatially sorted: a task's deposits share nodes
+constexpr size_t kPhotonsPerTask = 2048;         // in the map's spatial order: a task's deposits share nodes
 constexpr size_t kCutNodesPerTask = 16;
 constexpr size_t kSamplesPerTask = 8192;
 constexpr uint32_t kPrefetch = 16;               // samples fetched ahead when gathering a node's samples
@@ -106,7 +111,9 @@ constexpr size_t kMaxParentFacets = 256;         // and only if P holds at most 
 constexpr double kFallbackLeafDiagonal = 2.0;    // auto level: exact splat when median leaf diagonal > this × r
 constexpr double kFixedPointRange = 2305843009213693952.0;  // 2^61
 constexpr float kPi = 3.14159265358979f;
-constexpr float kSplitAngle = 20.0f * kPi / 180.0f;  // split a cut node whose normals spread wider than this
+// Split a cut node whose normals spread wider than this (20°); split it by whole leaf parts (hierarchy.h) when
+// every part is narrower than half of it.
+constexpr float kSplitAngle = 2.0f * kNarrowLeafAngle;
 constexpr float kConeInflation = 1e-4f;          // rad, as the hierarchy inflates its cones
 constexpr float kNever = -2.0f;                  // a cosine threshold no dot product of unit vectors reaches
 
@@ -355,34 +362,33 @@ uint32_t describe_cut_node(const ClusterHierarchy& hierarchy, const std::vector<
     return 1;
 }
 
-// One facet from the leaves' summaries (hierarchy.leaf_summaries[first, last)) around `axis`: its count and
-// centroid from the leaves `owned` gives, its bounds (cone, slab, reach) from those `bounded` gives, which must
-// include every leaf that may hold a sample shaded from this facet. Widened by each leaf's own bounds, so the
-// rejection tests stay conservative. Returns false when no owned leaf has a sample.
-template <typename Owned, typename Bounded>
-bool facet_from_leaves(const ClusterHierarchy& hierarchy, size_t first, size_t last, const glm::dvec3& axis,
-                       const SplatParams& params, Owned owned, Bounded bounded, Facet& out) {
+// One facet from the parts of a node's leaves (hierarchy.leaf_summaries[first, last)) that `owned` gives, around
+// `axis`: its count and centroid, and its bounds (cone, slab, reach) widened by each part's own bounds, so the
+// rejection tests stay conservative. Returns false when no owned part has a sample.
+template <typename Owned>
+bool facet_from_parts(const ClusterHierarchy& hierarchy, size_t first, size_t last, const glm::dvec3& axis,
+                      const SplatParams& params, Owned owned, Facet& out) {
     glm::dvec3 position_sum(0.0);
     double count = 0.0;
     for (size_t l = first; l != last; ++l) {
-        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
-        if (leaf.count == 0 || !owned(l)) continue;
-        position_sum += glm::dvec3(leaf.centroid) * double(leaf.count);
-        count += leaf.count;
+        const LeafSummary& part = hierarchy.leaf_summaries[l];
+        if (part.count == 0 || !owned(l)) continue;
+        position_sum += glm::dvec3(part.centroid) * double(part.count);
+        count += part.count;
     }
     if (count == 0.0) return false;
     const glm::dvec3 centroid = position_sum / count;
     double spread = 0.0, slab = 0.0, reach = 0.0;
     for (size_t l = first; l != last; ++l) {
-        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
-        if (leaf.count == 0 || !bounded(l)) continue;
-        const glm::dvec3 leaf_axis = glm::normalize(glm::dvec3(leaf.normal_sum));
-        spread = std::max(spread, std::acos(std::clamp(glm::dot(axis, leaf_axis), -1.0, 1.0)) + leaf.cone_angle);
+        const LeafSummary& part = hierarchy.leaf_summaries[l];
+        if (part.count == 0 || !owned(l)) continue;
+        const glm::dvec3 part_axis = glm::normalize(glm::dvec3(part.normal_sum));
+        spread = std::max(spread, std::acos(std::clamp(glm::dot(axis, part_axis), -1.0, 1.0)) + part.cone_angle);
         // |a·(x − c)| <= |a·(c_l − c)| + |a_l·(x − c_l)| + |a − a_l|·|x − c_l|
-        const glm::dvec3 offset = glm::dvec3(leaf.centroid) - centroid;
-        slab = std::max(slab, std::fabs(glm::dot(axis, offset)) + double(leaf.slab) +
-                                  glm::length(axis - leaf_axis) * double(leaf.radius));
-        reach = std::max(reach, glm::length(offset) + double(leaf.radius));
+        const glm::dvec3 offset = glm::dvec3(part.centroid) - centroid;
+        slab = std::max(slab, std::fabs(glm::dot(axis, offset)) + double(part.slab) +
+                                  glm::length(axis - part_axis) * double(part.radius));
+        reach = std::max(reach, glm::length(offset) + double(part.radius));
     }
     out = Facet();
     out.axis = glm::vec3(axis);
@@ -394,24 +400,27 @@ bool facet_from_leaves(const ClusterHierarchy& hierarchy, size_t first, size_t l
     return true;
 }
 
-// A cut node's facets from its leaves' summaries instead of its samples: one facet when the leaves bound the
-// normals within kSplitAngle; else two, split as describe_cut_node splits samples (seeds, one k-means step) but
-// with whole leaves, provided every leaf is narrow (a leaf across a crease needs its samples). A sample is shaded
-// from the facet whose axis is closest to ITS normal, which may not be its leaf's: each facet's bounds therefore
-// take every leaf whose cone reaches into that facet's side. Returns the facet count, or 0 when the node must be
-// described from its samples (unbounded or cancelling normals, a wide leaf, a failed split).
-uint32_t describe_node_from_leaves(const ClusterHierarchy& hierarchy, size_t first, size_t last,
-                                   const SplatParams& params, Facet* out) {
+// A cut node's facets from the summaries of its leaves instead of its samples. `first`, `last` index
+// hierarchy.leaf_summaries: the parts of the node's leaves (a leaf across a crease comes as parts split by
+// orientation, hierarchy.h). One facet when the parts bound the normals within kSplitAngle; else two, split as
+// describe_cut_node splits samples (seeds, one k-means step) but with whole parts: each part goes to the facet
+// whose axis is closest to its own, and so do its samples when they are shaded (part_facet[l − first] says
+// which), so each facet's bounds are exactly those of its parts. Returns the facet count, or 0 when the node must
+// be described from its samples (unbounded or cancelling normals, a part wider than kNarrowLeafAngle in a node
+// to split, a failed split).
+uint32_t describe_node_from_parts(const ClusterHierarchy& hierarchy, size_t first, size_t last,
+                                  const SplatParams& params, Facet* out, uint8_t* part_facet) {
     glm::dvec3 normal_sum(0.0);
     double count = 0.0;
     bool narrow = true;
     for (size_t l = first; l != last; ++l) {
-        const LeafSummary& leaf = hierarchy.leaf_summaries[l];
-        if (leaf.count == 0) continue;
-        if (!(leaf.cone_angle < kPi)) return 0;
-        narrow = narrow && leaf.cone_angle < 0.5f * kSplitAngle;
-        normal_sum += glm::dvec3(leaf.normal_sum);
-        count += leaf.count;
+        const LeafSummary& part = hierarchy.leaf_summaries[l];
+        part_facet[l - first] = 0;
+        if (part.count == 0) continue;
+        if (!(part.cone_angle < kPi)) return 0;
+        narrow = narrow && part.cone_angle < kNarrowLeafAngle;
+        normal_sum += glm::dvec3(part.normal_sum);
+        count += part.count;
     }
     const double length = glm::length(normal_sum);
     if (count == 0.0 || !(length > 1e-3 * count)) return 0;
@@ -428,8 +437,8 @@ uint32_t describe_node_from_leaves(const ClusterHierarchy& hierarchy, size_t fir
         if (glm::dot(mean, a) < lowest) lowest = glm::dot(mean, a), seed0 = a;
     }
     const auto all = [](size_t) { return true; };
-    if (spread < kSplitAngle) return facet_from_leaves(hierarchy, first, last, mean, params, all, all, out[0]) ? 1 : 0;
-    if (!narrow) return 0;
+    if (spread < kSplitAngle) return facet_from_parts(hierarchy, first, last, mean, params, all, out[0]) ? 1 : 0;
+    if (!narrow) return 0;  // a part holding several orientations would blur the split: the samples do better
     glm::dvec3 seed1 = seed0;
     lowest = 2.0;
     for (size_t l = first; l != last; ++l) {
@@ -445,23 +454,14 @@ uint32_t describe_node_from_leaves(const ClusterHierarchy& hierarchy, size_t fir
     }
     const double l0 = glm::length(sums[0]), l1 = glm::length(sums[1]);
     if (!(l0 > 0.0) || !(l1 > 0.0)) return 0;
-    // The axes as floats, as facet_of will compare them.
-    const glm::dvec3 axes[2] = {glm::dvec3(glm::vec3(sums[0] / l0)), glm::dvec3(glm::vec3(sums[1] / l1))};
-    for (int f = 0; f < 2; ++f) {
-        const glm::dvec3 towards = axes[f] - axes[1 - f];
-        const double separation = glm::length(towards);
-        if (!(separation > 1e-6)) return 0;
-        const glm::dvec3 d = towards / separation;
-        const auto owned = [&](size_t l) {
-            const glm::dvec3 a = axis_of(l);
-            return (glm::dot(a, axes[1]) > glm::dot(a, axes[0]) ? 1 : 0) == f;
-        };
-        // The leaf's cone reaches f's side {n : n·d >= 0} (with a margin for rounding).
-        const auto bounded = [&](size_t l) {
-            return glm::dot(axis_of(l), d) >= -std::sin(double(hierarchy.leaf_summaries[l].cone_angle)) - 1e-4;
-        };
-        if (!facet_from_leaves(hierarchy, first, last, axes[f], params, owned, bounded, out[f])) return 0;
-    }
+    const glm::dvec3 axes[2] = {sums[0] / l0, sums[1] / l1};
+    for (size_t l = first; l != last; ++l)
+        if (hierarchy.leaf_summaries[l].count > 0)
+            part_facet[l - first] = glm::dot(axis_of(l), axes[1]) > glm::dot(axis_of(l), axes[0]) ? 1 : 0;
+    for (uint8_t f = 0; f < 2; ++f)
+        if (!facet_from_parts(hierarchy, first, last, axes[f], params,
+                              [&](size_t l) { return part_facet[l - first] == f; }, out[f]))
+            return 0;
     return 2;
 }
 
@@ -555,7 +555,7 @@ public:
         stats_.bytes["direction_bins"] = double(bins_.capacity() * sizeof(std::atomic<int64_t>));
         stats_.bytes["directional_nodes"] =
             double(facets_.capacity() * sizeof(Facet) + cuts_.capacity() * sizeof(Cut) +
-                   cut_of_sample_.capacity() * sizeof(uint32_t) +
+                   views_.size() * sizeof(uint32_t) +
                    walk_.capacity() * sizeof(WalkNode) + facet_tests_.capacity() * sizeof(FacetTest) +
                    shape_.parent.capacity() * sizeof(uint32_t) +
                    shape_.height.capacity() * sizeof(int) + shape_.order.capacity() * sizeof(uint32_t));
@@ -570,33 +570,56 @@ private:
         std::sort(cuts_.begin(), cuts_.end(), [&](const Cut& a, const Cut& b) {
             return hierarchy_.nodes[a.node].sample_begin < hierarchy_.nodes[b.node].sample_begin;
         });
+        if (cuts_.size() >= kFacetBit) throw InvalidInput("cluster hierarchy", "too many nodes for the directional cut");
         std::vector<Facet> pairs(2 * cuts_.size());
-        cut_of_sample_.assign(views_.size(), kNone);
-        // The leaves under a node: leaves are in sample order, so those whose first sample lies in its range.
-        const bool summaries = hierarchy_.leaf_summaries.size() == hierarchy_.leaves.size();
+        // Every sample lies under exactly one cut node, which writes it below: no need to fill it first.
+        cut_of_sample_.reset(new uint32_t[views_.size()]);
+        // The parts under a node: leaves are in sample order, so those whose first sample lies in its range.
+        const bool summaries = hierarchy_.leaf_summary_begin.size() == hierarchy_.leaves.size() + 1 &&
+                               hierarchy_.sample_part.size() == hierarchy_.sample_order.size();
         std::vector<uint32_t> leaf_begin(summaries ? hierarchy_.leaves.size() : 0);
         for (size_t l = 0; l < leaf_begin.size(); ++l) leaf_begin[l] = hierarchy_.nodes[hierarchy_.leaves[l]].sample_begin;
-        tbb::enumerable_thread_specific<std::vector<Oriented>> scratch;
+        struct Scratch {
+            std::vector<Oriented> points;
+            std::vector<uint8_t> part_facet;
+        };
+        tbb::enumerable_thread_specific<Scratch> scratch;
         std::atomic<uint64_t> from_summaries{0};
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-            std::vector<Oriented>& points = scratch.local();
+            Scratch& local = scratch.local();
             uint64_t described = 0;
             for (size_t c = r.begin(); c != r.end(); ++c) {
                 const ClusterNode& node = hierarchy_.nodes[cuts_[c].node];
-                // Flat nodes (most of a frame) from their leaves' summaries: reading the samples again, scattered
-                // over the frame, cost as much as shading them.
-                const size_t first = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_begin) - leaf_begin.begin());
-                const size_t last = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_end) - leaf_begin.begin());
-                const uint32_t from_leaves =
-                    summaries ? describe_node_from_leaves(hierarchy_, first, last, params_, &pairs[2 * c]) : 0;
-                if (from_leaves > 0) {
-                    cuts_[c].facet_count = from_leaves;
-                    ++described;
-                } else {
-                    cuts_[c].facet_count = describe_cut_node(hierarchy_, views_, node, params_, points, &pairs[2 * c]);
+                Facet* facets = &pairs[2 * c];
+                // Flat nodes (most of a frame) from their leaves' parts: reading the samples again, scattered over
+                // the frame, cost as much as shading them. Each sample then takes its part's facet.
+                if (summaries) {
+                    const size_t first = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_begin) - leaf_begin.begin());
+                    const size_t last = size_t(std::lower_bound(leaf_begin.begin(), leaf_begin.end(), node.sample_end) - leaf_begin.begin());
+                    const size_t first_part = hierarchy_.leaf_summary_begin[first];
+                    local.part_facet.resize(hierarchy_.leaf_summary_begin[last] - first_part);
+                    const uint32_t count = describe_node_from_parts(hierarchy_, first_part, hierarchy_.leaf_summary_begin[last],
+                                                                    params_, facets, local.part_facet.data());
+                    if (count > 0) {
+                        cuts_[c].facet_count = count;
+                        ++described;
+                        for (size_t l = first; l != last; ++l) {
+                            const ClusterNode& leaf = hierarchy_.nodes[hierarchy_.leaves[l]];
+                            const uint8_t* facet_of_part = &local.part_facet[hierarchy_.leaf_summary_begin[l] - first_part];
+                            for (uint32_t k = leaf.sample_begin; k != leaf.sample_end; ++k)
+                                cut_of_sample_[hierarchy_.sample_order[k]] =
+                                    uint32_t(c) | (count == 2 && facet_of_part[hierarchy_.sample_part[k]] ? kFacetBit : 0u);
+                        }
+                        continue;
+                    }
                 }
-                for (uint32_t k = node.sample_begin; k != node.sample_end; ++k)
-                    cut_of_sample_[hierarchy_.sample_order[k]] = uint32_t(c);
+                // From the samples: each takes the facet whose axis is closest to its normal.
+                const uint32_t count = describe_cut_node(hierarchy_, views_, node, params_, local.points, facets);
+                cuts_[c].facet_count = count;
+                for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
+                    const uint32_t i = hierarchy_.sample_order[k];
+                    cut_of_sample_[i] = uint32_t(c) | (count == 2 && facet_of(views_[i].normal, facets, 2) ? kFacetBit : 0u);
+                }
             }
             from_summaries += described;
         });
@@ -613,13 +636,25 @@ private:
             if (diagonal(hierarchy_.nodes[p]) <= kParentSpan * own) cut.parent = p;
         }
         // What the traversal reads, packed: a node's box and children, or for a cut node its facets; and the
-        // facets' rejection tests without the rest of Facet. Indexed like the hierarchy's nodes and facets_.
-        walk_.resize(hierarchy_.nodes.size());
-        for (size_t n = 0; n < hierarchy_.nodes.size(); ++n) {
-            const ClusterNode& node = hierarchy_.nodes[n];
-            walk_[n] = {node.box_min, node.first_child, node.box_max, node.child_count};
+        // facets' rejection tests without the rest of Facet (facet_tests_, indexed like facets_).
+        // Only the nodes a photon can reach: those above the cut and the cut itself, breadth-first from the root
+        // (walk_[0]), each node's children kept together.
+        const auto cut_at = [&](uint32_t n) {  // cut nodes have disjoint sample ranges, and cuts_ is sorted by them
+            return std::lower_bound(cuts_.begin(), cuts_.end(), hierarchy_.nodes[n].sample_begin,
+                                    [&](const Cut& cut, uint32_t begin) { return hierarchy_.nodes[cut.node].sample_begin < begin; });
+        };
+        std::vector<uint32_t> walk_nodes{hierarchy_.root};
+        walk_.clear();
+        for (size_t w = 0; w < walk_nodes.size(); ++w) {
+            const ClusterNode& node = hierarchy_.nodes[walk_nodes[w]];
+            if (in_cut(shape_, walk_nodes[w], level_)) {
+                const Cut& cut = *cut_at(walk_nodes[w]);
+                walk_.push_back({node.box_min, cut.first_facet, node.box_max, cut.facet_count | kCutBit});
+                continue;
+            }
+            walk_.push_back({node.box_min, uint32_t(walk_nodes.size()), node.box_max, node.child_count});
+            for (uint32_t k = 0; k < node.child_count; ++k) walk_nodes.push_back(node.first_child + k);
         }
-        for (const Cut& cut : cuts_) walk_[cut.node].first = cut.first_facet, walk_[cut.node].count = cut.facet_count | kCutBit;
         facet_tests_.resize(facets_.size());
         for (size_t f = 0; f < facets_.size(); ++f) {
             const Facet& facet = facets_[f];
@@ -646,26 +681,6 @@ private:
         inv_unit_ = unit_ > 0.0 ? 1.0 / unit_ : 0.0;
     }
 
-    // Photon indices in Morton order of position (10 bits an axis over the photons' box), ties by index.
-    std::vector<uint32_t> spatial_order() const {
-        Box box;
-        for (const glm::vec3& p : positions_)
-            if (is_finite(p)) box.add(p);
-        const MortonGrid grid(box);
-        std::vector<std::pair<uint32_t, uint32_t>> keyed(positions_.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, keyed.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t j = r.begin(); j != r.end(); ++j) {
-                const uint32_t key = grid.key(positions_[j]);
-                keyed[j] = {key, uint32_t(j)};
-            }
-        });
-        // The render's photon map already comes in this order (photons.cpp): then there is nothing to sort.
-        if (!std::is_sorted(keyed.begin(), keyed.end())) std::sort(keyed.begin(), keyed.end());
-        std::vector<uint32_t> order(keyed.size());
-        for (size_t j = 0; j < keyed.size(); ++j) order[j] = keyed[j].second;
-        return order;
-    }
-
     // A task's deposits, summed locally (as integers, so exactly), then added to the shared bins once per facet.
     struct LocalBins {
         std::vector<uint32_t> slot_of;  // per facet: its slot in `sums`, or kNone
@@ -686,17 +701,6 @@ private:
     }
 
     void traverse() {
-        struct Packed {  // a photon's data, packed in traversal order: read sequentially
-            glm::vec3 position, wi, normal, power;
-        };
-        std::vector<Packed> packed;
-        {
-            const std::vector<uint32_t> order = spatial_order();
-            packed.reserve(order.size());
-            for (const uint32_t j : order)
-                if (usable(photons_[j], positions_[j]))
-                    packed.push_back({positions_[j], photons_[j].wi, photons_[j].normal, photons_[j].power});
-        }
         const float r2 = params_.radius * params_.radius;
         const float reject_box = r2 * (1.0f + 1e-5f);  // a margin, as in `cluster`: never drops a reachable node
         const bool plane_test = params_.plane_distance_factor > 0.0f;
@@ -707,15 +711,14 @@ private:
             local.slot_of.assign(facets_.size(), kNone);
             return local;
         });
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, packed.size(), kPhotonsPerTask), [&](const tbb::blocked_range<size_t>& range) {
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, photons_.size(), kPhotonsPerTask), [&](const tbb::blocked_range<size_t>& range) {
             control_.check();
             LocalBins& local = locals.local();
             std::vector<uint32_t> stack;
             stack.reserve(8 * size_t(hierarchy_.depth + 1));
             uint64_t tests = 0, deposits = 0, pairs = 0;
             // A photon at a cut node: each facet's tests, then the deposit.
-            const auto visit_facets = [&](const Packed& photon, const WalkNode& node) {
-                const glm::vec3& p = photon.position;
+            const auto visit_facets = [&](const glm::vec3& p, const Photon& photon, const WalkNode& node) {
                 const uint32_t first_facet = node.first, facet_count = node.count & ~kCutBit;
                 for (uint32_t f = first_facet; f != first_facet + facet_count; ++f) {
                     ++tests;
@@ -747,8 +750,9 @@ private:
                 }
             };
             for (size_t o = range.begin(); o != range.end(); ++o) {
-                const glm::vec3& p = packed[o].position;
-                stack.push_back(hierarchy_.root);
+                const glm::vec3& p = positions_[o];
+                if (!usable(photons_[o], p)) continue;
+                stack.push_back(0);  // walk_[0] is the root
                 while (!stack.empty()) {
                     const uint32_t index = stack.back();
                     stack.pop_back();
@@ -760,7 +764,7 @@ private:
                         for (uint32_t k = node.count; k-- > 0;) stack.push_back(node.first + k);
                         continue;
                     }
-                    visit_facets(packed[o], node);
+                    visit_facets(p, photons_[o], node);
                 }
             }
             flush(local);
@@ -837,11 +841,29 @@ private:
     };
     static_assert(std::is_trivially_default_constructible_v<FacetShade>, "allocated uninitialised");
 
+    // What every sample reads of its facet, in one cache line (FacetShade's bins are 0.7 KB): where it is, for
+    // β, and for a diffuse sample that every bin faces the whole answer up to its albedo and
+    // throughput: radiance = albedo·throughput·((1 − β)·own + β·parent), own and parent being the bins' sums
+    // × 1/π (the diffuse f_r) × K/N (finish_sample), in float like the radiance it makes.
+    struct FacetHot {
+        glm::vec3 centroid;
+        float inv_reach;  // 1 / reach, or 0 when reach is 0 (then β = 0 as t = 0)
+        glm::vec3 own, parent;
+        uint32_t mode;    // kSumsFaceAll: own and parent are the answer for diffuse samples; kHasParent; kHasBins
+        uint32_t bins;    // own + parent bins (the bin_evaluations counter)
+    };
+    static_assert(std::is_trivially_default_constructible_v<FacetHot>, "allocated uninitialised");
+    static constexpr uint32_t kSumsFaceAll = 1u, kHasParent = 2u, kHasBins = 4u;
+
     // Two passes: the facets' shading data, cut by cut; then the samples in pixel order, which reads the large
     // view samples and writes the radiance sequentially (walking them cut by cut, through sample_order, is a
     // cache miss per sample and cost as much as the rest of the splat).
     void shade() {
         const std::unique_ptr<FacetShade[]> shades(new FacetShade[facets_.size()]);
+        const std::unique_ptr<FacetHot[]> hot(new FacetHot[facets_.size()]);
+        constexpr double kInvPi = 0.318309886183790671538;
+        const double r = params_.radius;
+        const double to_radiance = kInvPi / (3.14159265358979323846 * r * r * double(params_.emitted));
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cuts_.size(), kCutNodesPerTask), [&](const tbb::blocked_range<size_t>& range) {
             control_.check();
             ParentCache cache;
@@ -855,6 +877,16 @@ private:
                     sh.parent_count = cut.parent != kNone ? parent_bins(cut.parent, facets_[f], sh.parent, cache) : 0;
                     sh.own_faces = faces_all(facets_[f], sh.own, sh.own_count, sh.own_sum);
                     sh.parent_faces = faces_all(facets_[f], sh.parent, sh.parent_count, sh.parent_sum);
+                    const Facet& facet = facets_[f];
+                    FacetHot& h = hot[f];
+                    h.inv_reach = facet.reach > 0.0f ? 1.0f / facet.reach : 0.0f;
+                    h.centroid = facet.centroid;
+                    h.mode = (sh.own_faces && (sh.parent_count == 0 || sh.parent_faces) ? kSumsFaceAll : 0u) |
+                             (sh.parent_count > 0 ? kHasParent : 0u) |
+                             (sh.own_count > 0 || sh.parent_count > 0 ? kHasBins : 0u);
+                    h.bins = uint32_t(sh.own_count + sh.parent_count);
+                    h.own = glm::vec3(sh.own_sum * to_radiance);
+                    h.parent = glm::vec3(sh.parent_sum * to_radiance);
                 }
             }
             control_.advance(positions_.size() + (progress_ += range.size()), total_progress());
@@ -864,30 +896,30 @@ private:
             control_.check();
             uint64_t evaluations = 0;
             for (size_t i = range.begin(); i != range.end(); ++i) {
-                const uint32_t c = cut_of_sample_[i];
-                if (c == kNone) continue;  // not under the root (cannot happen for a valid hierarchy)
-                const Cut& cut = cuts_[c];
+                const uint32_t word = cut_of_sample_[i];
+                const Cut& cut = cuts_[word & ~kFacetBit];
                 const ViewSample& s = views_[i];
                 if (cut.facet_count == 0 || !is_finite(s.position)) continue;  // stays 0, as in brute
-                const Facet* facets = &facets_[cut.first_facet];
-                const uint32_t f = facet_of(s.normal, facets, cut.facet_count);
-                const FacetShade& sh = shades[cut.first_facet + f];
-                if (sh.own_count == 0 && sh.parent_count == 0) continue;
-                // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
+                const uint32_t f = cut.first_facet + (word & kFacetBit ? 1 : 0);
+                const FacetHot& h = hot[f];
+                if (!(h.mode & kHasBins)) continue;
+                const float t = glm::length(s.position - h.centroid) * h.inv_reach;
+                const float beta = h.mode & kHasParent ? float(kMaxParentBlend) * std::min(1.0f, t) : 0.0f;
                 const bool diffuse = !(s.flags & kGlossy);
+                evaluations += h.bins;
+                // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
+                if (diffuse && (h.mode & kSumsFaceAll)) {
+                    radiance_[i] = s.albedo * s.throughput * ((1.0f - beta) * h.own + beta * h.parent);
+                    continue;
+                }
+                const FacetShade& sh = shades[f];
                 glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, s.normal) * sh.own_sum
                                                           : reflect_bins(s, sh.own, sh.own_count);
-                evaluations += sh.own_count;
                 if (sh.parent_count > 0) {
-                    const Facet& facet = facets[f];
-                    const double t =
-                        facet.reach > 0.0f ? double(glm::length(s.position - facet.centroid)) / facet.reach : 0.0;
-                    const double beta = kMaxParentBlend * std::min(1.0, t);
                     const glm::dvec3 from_parent = diffuse && sh.parent_faces
                                                        ? sample_brdf(s, s.normal) * sh.parent_sum
                                                        : reflect_bins(s, sh.parent, sh.parent_count);
-                    flux = (1.0 - beta) * flux + beta * from_parent;
-                    evaluations += sh.parent_count;
+                    flux = (1.0 - double(beta)) * flux + double(beta) * from_parent;
                 }
                 radiance_[i] = finish_sample(s, flux, params_);
             }
@@ -929,9 +961,12 @@ private:
         float plane_reject;
     };
     static constexpr uint32_t kCutBit = 0x80000000u;
-    std::vector<WalkNode> walk_;              // per hierarchy node
+    std::vector<WalkNode> walk_;              // the nodes above the cut and the cut nodes, root first
     std::vector<FacetTest> facet_tests_;      // per facet
-    std::vector<uint32_t> cut_of_sample_;     // per view sample: the cut it lies under
+    // Per view sample: the index of the cut node it lies under, with kFacetBit set when the second of the node's
+    // facets shades it.
+    std::unique_ptr<uint32_t[]> cut_of_sample_;
+    static constexpr uint32_t kFacetBit = 0x80000000u;
     std::atomic<uint64_t> progress_{0};
     std::atomic<uint64_t> node_tests_{0}, deposits_{0}, pairs_{0}, bin_evaluations_{0};
 };
