@@ -36,7 +36,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
                                  float plane_distance, const std::string& kernel, int directional_level,
                                  int64_t passes, double time_limit, float alpha, bool guide_photons,
                                  bool caustics_pass, bool transparent,
-                                 uint64_t memory_budget) {
+                                 uint64_t memory_budget, float aimed_photons) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -56,6 +56,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.guide_photons = guide_photons;
     s.caustics_pass = caustics_pass;
     s.transparent = transparent;
+    s.aimed_photons = aimed_photons;
     ps::validate(s);
     return s;
 }
@@ -187,7 +188,7 @@ PYBIND11_MODULE(_core, m) {
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
              "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
              "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
-             "transparent"_a = false, "memory_budget"_a = 0)
+             "transparent"_a = false, "memory_budget"_a = 0, "aimed_photons"_a = ps::RenderSettings().aimed_photons)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -215,6 +216,10 @@ PYBIND11_MODULE(_core, m) {
                        "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
         .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
                        "Emit sun photons where pilot paths found them stored; unbiased (default True)")
+        .def_readwrite("aimed_photons", &ps::RenderSettings::aimed_photons,
+                       "Extra photons per pass aimed at mirror and glass objects (point, spot and area lights), as a "
+                       "fraction of photons; they add caustic photons only, weighted so the image stays unbiased. "
+                       "0 = off.")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -226,7 +231,7 @@ PYBIND11_MODULE(_core, m) {
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
               << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
-              << ", guide_photons=" << (s.guide_photons ? "True" : "False")
+              << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ", aimed_photons=" << s.aimed_photons
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
               << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
             return o.str();

@@ -288,4 +288,70 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
     return out;
 }
 
+bool light_can_aim(const Light& light) {
+    return light.kind == LightKind::point || light.kind == LightKind::spot || light.kind == LightKind::area;
+}
+
+glm::vec3 emission_anchor(const Light& light, float u1, float u2) {
+    return light.kind == LightKind::area ? point_on_area_light(light, u1, u2) : light.position;
+}
+
+float emission_direction_pdf(const Light& light, const glm::vec3& /*anchor*/, const glm::vec3& direction) {
+    switch (light.kind) {
+        case LightKind::point:
+            // Uniform on the sphere; for a spherical emitter too (uniform point, cosine-weighted direction
+            // integrates to 1/(4π) over the points that face it).
+            return 1.0f / (4.0f * kPi);
+        case LightKind::spot: {
+            const float c = std::cos(0.5f * light.spot_size);
+            const float mu = glm::dot(direction, glm::normalize(light.direction));
+            return mu >= c && c < 1.0f ? mu / (kPi * (1.0f - c * c)) : 0.0f;
+        }
+        case LightKind::area: return std::max(0.0f, glm::dot(direction, light.area_normal())) / kPi;
+        case LightKind::sun: return 0.0f;
+    }
+    return 0.0f;
+}
+
+EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const glm::vec3& direction, float u3,
+                              float u4) {
+    EmissionSample out;
+    out.direction = direction;
+    out.origin = anchor;
+    out.power = glm::vec3(0.0f);
+    switch (light.kind) {
+        case LightKind::point: {
+            out.power = light_flux(light, 0.0f);
+            if (light.radius > 0.0f) {
+                // Rays of one direction leaving a uniformly bright sphere cross the disc facing that direction
+                // uniformly: start where such a ray leaves the sphere's front.
+                glm::vec3 d1, d2;
+                orthonormal_basis(direction, d1, d2);
+                const float r = std::sqrt(u3), psi = 2.0f * kPi * u4;
+                const glm::vec3 across = r * (std::cos(psi) * d1 + std::sin(psi) * d2);
+                out.origin = anchor + light.radius * (across + std::sqrt(std::max(0.0f, 1.0f - r * r)) * direction);
+            }
+            break;
+        }
+        case LightKind::spot: {
+            const float c = std::cos(0.5f * light.spot_size);
+            const float mu = glm::dot(direction, glm::normalize(light.direction));
+            if (!(mu >= c)) break;
+            out.power = kPi * (1.0f - c * c) * light.value * spot_smoothstep(mu, c, light.spot_blend);
+            if (light.radius > 0.0f) {
+                glm::vec3 d1, d2;
+                orthonormal_basis(direction, d1, d2);
+                const float r = light.radius * std::sqrt(u3), psi = 2.0f * kPi * u4;
+                out.origin += r * (std::cos(psi) * d1 + std::sin(psi) * d2);
+            }
+            break;
+        }
+        case LightKind::area:
+            if (glm::dot(direction, light.area_normal()) > 0.0f) out.power = light_flux(light, 0.0f);
+            break;
+        case LightKind::sun: break;
+    }
+    return out;
+}
+
 }  // namespace ps

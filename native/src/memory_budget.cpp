@@ -216,7 +216,12 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     budget.reserve("view_sample_scratch", predict_view_sample_scratch_bytes(w, h), "resolution");
     budget.release("view_sample_scratch");
     budget.reserve("direct_light", predict_per_sample_light_bytes(pixels), "resolution");
-    const double photon_map = predict_photon_map_bytes(scene, settings.photons, settings.max_bounces);
+    // Aimed photons (caustic_aim.h) store at most one photon each.
+    bool specular = false;
+    for (const Material& m : scene.materials()) specular = specular || m.is_specular();
+    const double aimed = specular ? std::ceil(double(settings.aimed_photons) * double(settings.photons)) : 0.0;
+    const double photon_map = predict_photon_map_bytes(scene, settings.photons, settings.max_bounces) +
+                              aimed * double(sizeof(Photon));
     budget.reserve("photon_map", photon_map, "photons");
     // While tracing, the photons sit in per-chunk vectors (up to twice their size) before the map is filled.
     budget.reserve("photon_trace_scratch", 2.0 * photon_map, "photons");

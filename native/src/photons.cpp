@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "photonsplat/caustic_aim.h"
 #include "photonsplat/emission_guide.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/materials.h"
@@ -58,18 +59,30 @@ SourceChoice choose_sources_by_power(const LightSources& sources) {
     return choice;
 }
 
+// How a photon's caustic photons (light → specular+ → this hit) are weighed when photons are aimed at mirrors
+// and glass (caustic_aim.h). An aimed photon keeps only its caustic photon; an ordinary one weighs its caustic
+// photons by the balance heuristic, found at its first specular hit (most photons never make one).
+struct CausticWeighting {
+    const CausticAim* aim = nullptr;  // null: no aiming, every weight 1
+    size_t source = 0;
+    bool aimed = false;
+};
+
 // Follows one photon from its emission, appending what it stores to `out`.
 void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, int max_bounces, Rng& rng,
-                std::vector<Photon>& out) {
+                std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
+    float caustic_weight = 1.0f;
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit);
         const Material& m = *s.material;
         if (m.is_specular()) {
+            if (vertex == 0 && weighting.aim && !weighting.aimed)
+                caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
             const SpecularStep step = scatter_specular(m, s, ray.direction, rng.uniform());
             // Russian roulette on the tint keeps every surviving photon's power near the emitted one.
             const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
@@ -82,9 +95,11 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         // Diffuse or glossy hit. The first one is direct light, which shadow rays already account for. A glossy
         // bounce is not specular: like a diffuse one it ends the L S+ D prefix of caustic paths.
         if (vertex > 0) {
-            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, power,
-                                 only_specular_so_far ? static_cast<uint32_t>(kCaustic) : 0u});
+            const bool caustic = only_specular_so_far;
+            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
+                                 caustic ? static_cast<uint32_t>(kCaustic) : 0u});
         }
+        if (weighting.aimed) return;  // an aimed photon stands for caustics only
         only_specular_so_far = false;
         if (m.is_glossy()) {
             // Importance-sample the GGX lobe; its weight f·cos/pdf = F·G1 <= 1 is then played by Russian
@@ -110,13 +125,26 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
 
 // One photon of `source`: its emission (redistributed by the source's guide, if any), then its path.
 void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
-                      const EmissionGuide& guide, int max_bounces, Rng& rng, std::vector<Photon>& out) {
+                      const EmissionGuide& guide, const CausticAim& aim, int max_bounces, Rng& rng,
+                      std::vector<Photon>& out) {
     float u1 = rng.uniform(), u2 = rng.uniform();
     const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
     // Only a guided source draws the extra number, so unguided photons are the same as they always were.
     const float weight = guide.uniform() ? 1.0f : guide.sample(rng.uniform(), u1, u2);
     const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
-    trace_path(scene, emitted, emitted.power * (weight / source_probability), max_bounces, rng, out);
+    CausticWeighting weighting;
+    if (aim.active() && aim.aimed_probability(source) > 0.0f) weighting = {&aim, source, false};
+    trace_path(scene, emitted, emitted.power * (weight / source_probability), max_bounces, rng, out, weighting);
+}
+
+// One photon aimed at a mirror or glass object (caustic_aim.h): only its caustic photon is kept.
+void trace_one_aimed_photon(const Scene& scene, const CausticAim& aim, const std::vector<float>& source_probability,
+                            int max_bounces, Rng& rng, std::vector<Photon>& out) {
+    const size_t source = aim.pick_source(rng.uniform());
+    const EmissionSample emitted = aim.sample(source, rng);
+    if (!(luminance(emitted.power) > 0.0f)) return;
+    trace_path(scene, emitted, emitted.power / source_probability[source], max_bounces, rng, out,
+               CausticWeighting{&aim, source, true});
 }
 
 // The guide of a sun (emission_guide.h): kPilotsPerCell pilot photons per cell of its (u1, u2) square, each
@@ -191,7 +219,11 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
             }
         control.check();
     }
-    const uint64_t chunks = (settings.count + kChunk - 1) / kChunk;
+    const CausticAim aim(scene, sources, choice.probability, settings.aimed_fraction);
+    map.aimed = aim.active() ? static_cast<uint64_t>(std::llround(double(settings.aimed_fraction) * double(settings.count))) : 0;
+    // Ordinary photons take indices [0, count), aimed ones [count, count + aimed): each index its own stream.
+    const uint64_t paths = settings.count + map.aimed;
+    const uint64_t chunks = (paths + kChunk - 1) / kChunk;
     std::vector<std::vector<Photon>> per_chunk(chunks);
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> chunks_done{0};
@@ -200,14 +232,18 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
             cancelled = true;
             return;
         }
-        const uint64_t end = std::min(settings.count, (chunk + 1) * kChunk);
+        const uint64_t end = std::min(paths, (chunk + 1) * kChunk);
         for (uint64_t index = chunk * kChunk; index < end; ++index) {
             Rng rng(settings.seed, RngDomain::photon, index);
+            if (index >= settings.count) {
+                trace_one_aimed_photon(scene, aim, choice.probability, settings.max_bounces, rng, per_chunk[chunk]);
+                continue;
+            }
             const float u = rng.uniform();
             const size_t l = static_cast<size_t>(std::upper_bound(choice.cdf.begin(), choice.cdf.end(), u) - choice.cdf.begin());
             const size_t which = std::min(l, choice.cdf.size() - 1);
-            trace_one_photon(scene, sources, which, choice.probability[which], guides[which], settings.max_bounces,
-                             rng, per_chunk[chunk]);
+            trace_one_photon(scene, sources, which, choice.probability[which], guides[which], aim,
+                             settings.max_bounces, rng, per_chunk[chunk]);
         }
         control.advance(++chunks_done, chunks);
     });
@@ -227,6 +263,7 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     size_t caustic = 0;
     for (const Photon& p : map.photons) caustic += (p.flags & kCaustic) ? 1 : 0;
     stats.counters["photons_emitted"] += static_cast<double>(map.emitted);
+    if (map.aimed > 0) stats.counters["aimed_photons_emitted"] += static_cast<double>(map.aimed);
     stats.counters["photons_stored"] += static_cast<double>(map.photons.size());
     stats.counters["caustic_photons_stored"] += static_cast<double>(caustic);
     stats.bytes["photon_map"] = static_cast<double>(map.bytes());

@@ -50,6 +50,8 @@ void validate(const RenderSettings& s) {
             "must be in [0, " + std::to_string(int(kMaxTimeLimit)) + "] seconds (0 = none)", s.time_limit);
     require(s.passes > 0 || s.time_limit > 0.0, "passes",
             "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.passes);
+    require(std::isfinite(s.aimed_photons) && s.aimed_photons >= 0.0f && s.aimed_photons <= 16.0f, "aimed_photons",
+            "must be in [0, 16] (a fraction of photons; 0 = off)", s.aimed_photons);
     require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
             "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
 }
@@ -127,6 +129,7 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
         photon_settings.max_bounces = settings.max_bounces;
         photon_settings.seed = seed;
         photon_settings.guide = settings.guide_photons;
+        photon_settings.aimed_fraction = settings.aimed_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
 
         SplatParams params;

@@ -137,7 +137,8 @@ def test_bit_identical_for_any_thread_count(cornell):
 
 
 @pytest.mark.parametrize("field, value", [("passes", -1), ("time_limit", -1.0), ("time_limit", math.inf),
-                                          ("alpha", 0.0), ("alpha", 1.5)])
+                                          ("alpha", 0.0), ("alpha", 1.5), ("aimed_photons", -0.5),
+                                          ("aimed_photons", math.nan)])
 def test_bad_progressive_settings_name_the_field(field, value):
     with pytest.raises((ValueError, TypeError), match=field if field != "passes" or value >= 0 else ""):
         ps.RenderSettings(**{field: value})

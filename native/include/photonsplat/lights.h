@@ -72,6 +72,22 @@ struct EmissionSample {
 };
 EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_center, float scene_radius,
                                      float u1, float u2, float u3, float u4);
+
+// The same emission with the direction chosen by the caller (photons aimed at mirrors and glass,
+// caustic_aim.h). Point, spot and area lights only. Their photons leave an anchor: the centre of a point or
+// spot light, or for an area light the point emission_anchor(u1, u2) draws exactly as sample_light_emission
+// does. Given the direction, the origin is distributed as in sample_light_emission (a uniform offset on the
+// disc of a soft light facing that direction), so the two samplings differ in their direction density alone.
+bool light_can_aim(const Light& light);  // point, spot, area
+glm::vec3 emission_anchor(const Light& light, float u1, float u2);
+// Solid-angle density with which sample_light_emission draws `direction` (unit) leaving `anchor`; 0 where the
+// light sends nothing.
+float emission_direction_pdf(const Light& light, const glm::vec3& anchor, const glm::vec3& direction);
+// A photon leaving `anchor` along `direction`: power = emitted intensity / emission_direction_pdf, the power
+// sample_light_emission would give that direction (0 where the light sends nothing). u3, u4 place a soft
+// light's origin.
+EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const glm::vec3& direction, float u3,
+                              float u4);
 void validate(const Light& light, const std::string& where);
 
 }  // namespace ps

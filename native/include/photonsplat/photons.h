@@ -26,7 +26,8 @@ struct Photon {
 
 struct PhotonMap {
     std::vector<Photon> photons;  // in Morton order of position, ties by emission order: deterministic
-    uint64_t emitted = 0;         // photon paths started: the density estimate divides by this
+    uint64_t emitted = 0;         // ordinary photon paths started: the density estimate divides by this
+    uint64_t aimed = 0;           // extra caustic photon paths aimed at mirrors and glass (caustic_aim.h)
     size_t bytes() const { return photons.capacity() * sizeof(Photon); }
 };
 
@@ -35,6 +36,7 @@ struct PhotonSettings {
     int max_bounces = 8;      // path length bound (a photon is stored at most this many times)
     uint64_t seed = 0;
     bool guide = true;        // learn where sun photons get stored, and emit them there (emission_guide.h)
+    float aimed_fraction = 0.0f;  // extra photons aimed at mirrors and glass, × count (caustic_aim.h); 0 = off
 };
 
 PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, const RenderControl& control,

@@ -26,6 +26,10 @@ struct RenderSettings {
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
     uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
     bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)
+    // Extra photons per pass aimed at mirror and glass objects from point, spot and area lights, as a fraction
+    // of `photons`; they only add caustic photons (caustic_aim.h). 0 = off; nothing is added without mirrors
+    // or glass.
+    float aimed_photons = 0.1f;
     bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
     // Progressive rendering (progressive.h): passes of new photons, jittered camera rays and a shrinking radius,
