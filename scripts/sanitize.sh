@@ -49,12 +49,17 @@ for step in $steps; do
       configure build-fuzz photonsplat_fuzz -DCMAKE_CXX_COMPILER=clang++-14 -DPHOTONSPLAT_BUILD_TESTS=OFF \
         -DPHOTONSPLAT_BUILD_FUZZER=ON -DPHOTONSPLAT_SANITIZE="address;undefined;fuzzer-no-link"
       scratch="$(mktemp -d)"
+      # The fuzzer's own exit status decides, not only the artifacts: a crash inside a library (an abort from
+      # an assertion) may end the run before libFuzzer writes a crash-* file.
+      fuzz_status=0
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
         "$root/build-fuzz/photonsplat_fuzz" "$scratch" "$root/fuzz/corpus" -max_total_time="$fuzz_seconds" \
         -max_len=4096 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$scratch/" \
-        2>&1 | grep -E "^(#[0-9]+[[:space:]]+(INITED|DONE)|stat::|==[0-9]+==|SUMMARY|Done)" || true
-      if ls "$scratch"/crash-* "$scratch"/timeout-* "$scratch"/oom-* >/dev/null 2>&1; then
-        echo "fuzzing found failing inputs (kept in $scratch)"; status=1
+        >"$scratch/fuzz.log" 2>&1 || fuzz_status=$?
+      grep -E "^(#[0-9]+[[:space:]]+(INITED|DONE)|stat::|==[0-9]+==|SUMMARY|Done)" "$scratch/fuzz.log" || true
+      if [ "$fuzz_status" -ne 0 ] || ls "$scratch"/crash-* "$scratch"/timeout-* "$scratch"/oom-* >/dev/null 2>&1; then
+        tail -n 60 "$scratch/fuzz.log"
+        echo "fuzzing failed (exit status $fuzz_status; inputs and log kept in $scratch)"; status=1
       else
         rm -rf "$scratch"
       fi

@@ -1,5 +1,6 @@
 #include "photonsplat/ray_tracer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -7,6 +8,8 @@
 #include <string>
 
 #include <embree3/rtcore.h>
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 
 #include "photonsplat/scene.h"
@@ -133,6 +136,7 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
         }
         rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
+        measure_reach(instances);
         bytes_ += instances.size() * (sizeof(glm::mat4) + 64);  // transform + a top-level BVH node, roughly
     } catch (...) {
         delete impl_;
@@ -155,10 +159,58 @@ void RayTracer::update_instances(const std::vector<Instance>& instances, const s
     }
     rtcCommitScene(impl_->top);
     throw_on_embree_error(shared_device(), "updating instance transforms");
+    measure_reach(instances);
 }
 
-bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, uint32_t rays) const {
-    if (!embree_accepts(ray, t_min, t_max)) return false;
+void RayTracer::measure_reach(const std::vector<Instance>& instances) {
+    reach_scale_ = reach_offset_ = 0.0;
+    for (const Instance& instance : instances) {
+        if (is_flat(instance)) continue;
+        // normal_to_world is M⁻¹ transposed: the same Frobenius norm, which bounds the spectral one.
+        const glm::dmat3 n(instance.normal_to_world);
+        const double scale = std::sqrt(glm::dot(n[0], n[0]) + glm::dot(n[1], n[1]) + glm::dot(n[2], n[2]));
+        reach_scale_ = std::max(reach_scale_, scale);
+        reach_offset_ = std::max(reach_offset_, scale * glm::length(glm::dvec3(glm::vec3(instance.to_world[3]))));
+    }
+    RTCBounds bounds;
+    rtcGetSceneBounds(impl_->top, &bounds);
+    scene_lo_ = glm::vec3(bounds.lower_x, bounds.lower_y, bounds.lower_z);
+    scene_hi_ = glm::vec3(bounds.upper_x, bounds.upper_y, bounds.upper_z);
+}
+
+// A ray whose origin lies too far for every instance's space to hold it (a camera or a light absurdly far from a
+// mesh scaled down) is moved forward to where it enters the scene's box, since nothing lies before that; `shift`
+// says by how much. False when it misses the box or the box itself is out of reach. Ordinary rays are untouched.
+bool RayTracer::clip_to_scene(Ray& ray, float& t_min, float& t_max, float& shift) const {
+    constexpr double kReach = 1e17;  // an order of magnitude inside Embree's limit
+    const auto reachable = [&](const glm::vec3& o) {
+        const double far = std::max(std::fabs(double(o.x)), std::max(std::fabs(double(o.y)), std::fabs(double(o.z))));
+        return reach_scale_ * std::sqrt(3.0) * far + reach_offset_ <= kReach;
+    };
+    shift = 0.0f;
+    if (reachable(ray.origin)) return true;
+    float enter = 0.0f, leave = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < 3; ++i) {
+        const float inverse = 1.0f / ray.direction[i];
+        float a = (scene_lo_[i] - ray.origin[i]) * inverse, b = (scene_hi_[i] - ray.origin[i]) * inverse;
+        if (a > b) std::swap(a, b);
+        if (!(a <= b)) continue;  // parallel to the slab (0 · ∞): the origin is inside it or never enters
+        enter = std::max(enter, a);
+        leave = std::min(leave, b);
+    }
+    if (!(enter <= leave) || !(enter < t_max)) return false;
+    shift = enter;
+    ray.origin = ray.origin + shift * ray.direction;
+    t_min = std::max(0.0f, t_min - shift);
+    t_max = t_max - shift;
+    return t_min <= t_max && reachable(ray.origin);
+}
+
+bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hit, uint32_t rays) const {
+    if (!embree_accepts(original, t_min, t_max)) return false;
+    Ray ray = original;
+    float shift = 0.0f;
+    if (!clip_to_scene(ray, t_min, t_max, shift)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -178,7 +230,7 @@ bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, ui
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->top, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
-    hit.t = rh.ray.tfar;
+    hit.t = rh.ray.tfar + shift;
     hit.instance = rh.hit.instID[0];
     hit.triangle = rh.hit.primID;
     hit.u = rh.hit.u;
@@ -186,8 +238,11 @@ bool RayTracer::intersect(const Ray& ray, float t_min, float t_max, Hit& hit, ui
     return true;
 }
 
-bool RayTracer::occluded(const Ray& ray, float t_min, float t_max, uint32_t rays) const {
-    if (!embree_accepts(ray, t_min, t_max)) return false;
+bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t rays) const {
+    if (!embree_accepts(original, t_min, t_max)) return false;
+    Ray ray = original;
+    float shift = 0.0f;
+    if (!clip_to_scene(ray, t_min, t_max, shift)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r;

@@ -57,12 +57,25 @@ glm::dvec3 grid_centre(const glm::dvec3& lo, const glm::dvec3& hi, const glm::dv
     return q * glm::dvec3(std::round(centre.x / q), std::round(centre.y / q), std::round(centre.z / q));
 }
 
-// The normal matrix, or false when the transform flattens space (zero scale on some axis).
+double frobenius(const glm::dmat3& m) {
+    return std::sqrt(glm::dot(m[0], m[0]) + glm::dot(m[1], m[1]) + glm::dot(m[2], m[2]));
+}
+
+// The normal matrix, or false when the transform flattens space: a zero scale on some axis, or one that is flat
+// to float precision. Embree traces a ray through an instance in the mesh's own space, M⁻¹·(o − t), and asserts
+// (aborting the process, Blender with it) once a coordinate passes 1.8e18: a nearly singular M (axes nearly
+// parallel: the fuzzer found one) or one that shrinks a mesh by more than kMaxInverseScale sends ordinary rays
+// there. Such an instance covers nothing (its triangles are counted as dropped).
+constexpr double kMaxCondition = 1e7;      // ‖M‖·‖M⁻¹‖ (Frobenius): past 2^24 its axes are not distinct in float
+constexpr double kMaxInverseScale = 1e9;   // ‖M⁻¹‖: a mesh scaled down by a billion is below float's resolution
 bool normal_matrix(const glm::mat4& m, glm::mat3& out) {
-    const glm::mat3 linear(m);
-    const float det = glm::determinant(linear);
-    if (!(std::fabs(det) > 1e-36f) || !std::isfinite(det)) return false;
-    out = glm::transpose(glm::inverse(linear));
+    const glm::dmat3 linear{glm::mat3(m)};
+    const double det = glm::determinant(linear);
+    if (!(std::fabs(det) > 0.0) || !std::isfinite(det)) return false;
+    const glm::dmat3 inverse = glm::inverse(linear);
+    const double inverse_norm = frobenius(inverse);
+    if (!(frobenius(linear) * inverse_norm <= kMaxCondition) || !(inverse_norm <= kMaxInverseScale)) return false;
+    out = glm::mat3(glm::transpose(inverse));
     for (int c = 0; c < 3; ++c)
         if (!is_finite(out[c])) return false;
     return true;

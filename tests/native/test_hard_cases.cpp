@@ -356,6 +356,46 @@ TEST(HardCases, ProgressiveAndReferenceRenderMovedScenesAlikeAndTheOriginFollows
 
 // The viewport's way (scene_cache.py): a scene built at the origin, every instance moved by 1e5 in place with
 // set_instance_transform, then fit_origin: bit for bit the image of the scene built there, for every method.
+// Embree traces a ray through an instance in the mesh's own space and asserts (aborting the process, Blender with
+// it) once a coordinate there passes 1.8e18. The fuzzer found a transform whose axes are nearly parallel (its
+// columns below); a mesh scaled down past 1e9 does the same. Such instances cover nothing and are counted as
+// dropped. And a camera absurdly far from a mesh scaled down a millionfold (1e13 × 1e6 = 1e19 in the mesh's
+// space) still renders: rays from that far start where they enter the scene's box.
+TEST(HardCases, InstancesEmbreeCannotTraceAreDroppedAndFarRaysStartAtTheScene) {
+    glm::dmat4 nearly_parallel(1.0);
+    nearly_parallel[0] = glm::dvec4(3.0, 3.0, 2.97813, 0.0);
+    nearly_parallel[1] = glm::dvec4(2.6, 2.6, 2.6, 0.0);
+    nearly_parallel[2] = glm::dvec4(-0.2, -0.2, -0.2, 0.0);
+    glm::dmat4 tiny(1e-10);
+    tiny[3] = glm::dvec4(0.0, 0.0, 0.5, 1.0);
+    for (const glm::dmat4& bad : {nearly_parallel, tiny}) {
+        Scene scene;
+        test::build_cornell_box(scene, false);
+        const size_t before = scene.dropped_triangles();
+        test::add_box(scene, "bad", {-0.2f, -0.2f, 0.2f}, {0.2f, 0.2f, 0.6f}, 0, bad);
+        EXPECT_EQ(scene.dropped_triangles(), before + 12);
+        RenderSettings settings;
+        settings.photons = 2000;
+        render_every_method(scene, test::cornell_camera(8, 8), settings, "ill-conditioned instance");
+    }
+    Scene scene;
+    scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.8f), 1.45f, glm::vec3(0.0f)});
+    glm::dmat4 micro(1e-6);
+    micro[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
+    test::add_box(scene, "micro", {-0.5f, -0.5f, 0.0f}, {0.5f, 0.5f, 1.0f}, 0, micro);
+    scene.add_light(test::point_light("lamp", {0.0f, -2e-6f, 2e-6f}, 1e-10f));
+    const Camera far = test::look_at({0.0f, -1e13f, 5e-7f}, {0.0f, 0.0f, 5e-7f}, 1, 1, 1e-3f, {0, 0, 1}, 1e10f);
+    RenderSettings settings;
+    settings.photons = 1000;
+    settings.radius = 1e-7f;
+    settings.transparent = true;  // alpha says whether the camera ray hit the box
+    for (SplatMethod method : all_methods()) {
+        const RenderResult r = render_with(scene, far, settings, method);
+        EXPECT_TRUE(all_finite(r.rgba)) << to_string(method);
+        EXPECT_EQ(r.rgba[3], 1.0f) << to_string(method);
+    }
+}
+
 TEST(HardCases, InstancesMovedFarInPlaceRenderAsAFreshSceneAfterFitOrigin) {
     const double d = 1e5, fraction = double(float(d + 0.3)) - d;
     const glm::dvec3 far(d + fraction, -d - fraction, d + 0.5 * fraction);

@@ -39,9 +39,17 @@ public:
     size_t bytes() const { return bytes_; }
 
 private:
+    // Embree traces a ray through an instance in the mesh's space, where its origin is M⁻¹·(o − t): that must
+    // stay below Embree's 1.8e18 (it asserts, aborting Blender, past it). ‖M⁻¹·(o − t)‖ <= scale·‖o‖ + offset
+    // over the enabled instances; a ray from farther than that allows starts where it enters the scene's box.
+    void measure_reach(const std::vector<Instance>& instances);
+    bool clip_to_scene(Ray& ray, float& t_min, float& t_max, float& shift) const;
+
     struct Impl;
     Impl* impl_;
     size_t bytes_ = 0;
+    double reach_scale_ = 0.0, reach_offset_ = 0.0;
+    glm::vec3 scene_lo_{0.0f}, scene_hi_{0.0f};  // the top level's bounds, render space
 };
 
 }  // namespace ps
