@@ -174,7 +174,7 @@ inline bool faces_photon(const NormalCone& cone, const PhotonCone& pc) {
 // not unit (see kNodeRegular), so it never rejects. θ + τ_r < π is cos θ > −cos τ_r.
 inline bool misoriented(const NormalCone& cone, const PhotonCone& pc) {
     const float cs = cone.cos_angle, sn = cone.sin_angle;
-    return pc.orientation & !cone.full() &
+    return pc.orientation & !(cs <= -1.0f) &  // not full(), as a comparison: the whole test stays branch-free
            (pc.fails_all | (pc.reject_angle & (cs > -pc.reject_cos) &
                             (glm::dot(cone.axis, pc.n) < cs * pc.reject_cos - sn * pc.reject_sin - kEpsilon)));
 }

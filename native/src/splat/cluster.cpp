@@ -443,7 +443,8 @@ private:
                         misoriented_count += !r2;
                         continue;
                     }
-                    cones_pass = faces_photon(cone, pc) & oriented(cone, pc);
+                    const bool faces = faces_photon(cone, pc), within = oriented(cone, pc);
+                    cones_pass = faces & within;
                 }
                 const float max_d2 = max_distance_sq(p, node.box_min, node.box_max);
                 bool accept = (max_d2 < accept_d2) & node.acceptable() & cones_pass;
