@@ -10,7 +10,7 @@ out_dir="$root/build/demo"
 mkdir -p "$out_dir"
 rm -f "$out_dir"/cornell_caustics_*.png
 # 16 progressive passes (each with new photons, jittered camera rays and a smaller radius) instead of the
-# scene's single pass: about 13 s of CPU on 2 cores, and the glass and the walls come out smooth.
+# scene's single pass: 7.5 s of rendering on the 2-core machine, and the glass and the walls come out smooth.
 BLENDER_USER_SCRIPTS="$root/build/blender" blender -b --factory-startup -noaudio --addons photonsplat \
   "$root/blend_scenes/cornell_caustics.blend" -E PHOTONSPLAT \
   --python-expr "import bpy; bpy.context.scene.photonsplat.passes = 16" \
