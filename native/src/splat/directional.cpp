@@ -92,8 +92,6 @@
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
 
-#include "../building_blocks.h"
-
 namespace ps {
 namespace {
 
