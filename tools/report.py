@@ -10,7 +10,8 @@ Two modes, both run by tools/run_report.sh (the one documented command):
 
     1. reference: photonsplat.render_reference (path tracing + progressive photon mapping of caustics) of the same
        exported scene, cached as build/report/reference/<scene>_<W>x<H>_<samples>spp.npy keyed by the .blend's
-       content, so reruns skip it;
+       content, so reruns skip it (--reference-only stops here: references can be rendered ahead under any load,
+       as their quality is a sample count, and the timed steps below run later on a quiet machine);
     2. the paper's tables (HPG 2016 talk): methods cluster_cone (the paper's cluster-trivial), directional and
        tiled at 10k / 50k / 200k / 1M photons with the engine's automatic radius for each count; one-shot renders;
     3. progressive splatting of every method (brute excepted) for a time budget, the mean measured after every
@@ -135,6 +136,8 @@ def measure_scene(args):
     # 1. the reference
     reference, record["reference"] = reference_image(core, frame, name, blend, caustic, args)
     np.save(out / "reference.npy", reference)
+    if args.reference_only:
+        return
 
     # 2. one-shot renders shaped like the paper's tables
     snapshots = {}
@@ -523,8 +526,12 @@ def parse_args():
                         help="photons per progressive pass (fewer, cheaper passes reach SSIM 0.9 sooner: docs/results)")
     parser.add_argument("--reference-samples", type=int, default=4096, help="reference passes (1 path/pixel each)")
     parser.add_argument("--reference-photons", type=int, default=100_000, help="caustic photons per reference pass")
-    parser.add_argument("--reference-seconds", type=float, default=150.0,
-                        help="time cap of one reference (it stops after the pass that reaches it)")
+    parser.add_argument("--reference-seconds", type=float, default=0.0,
+                        help="time cap of one reference (it stops after the pass that reaches it); 0 = none, so the "
+                             "reference's quality is --reference-samples whatever the machine's load")
+    parser.add_argument("--reference-only", action="store_true",
+                        help="render (or find in the cache) the reference and stop: references can be made ahead, "
+                             "under any load, and the timed measurements run later on a quiet machine")
     parser.add_argument("--cycles-max-samples", type=int, default=65536)
     parser.add_argument("--cycles-max-seconds", type=float, default=45.0,
                         help="stop Cycles' sample doubling after a render that took longer than this")
