@@ -10,7 +10,8 @@ Two modes, both run by tools/run_report.sh (the one documented command):
 
     1. reference: photonsplat.render_reference (path tracing + progressive photon mapping of caustics) of the same
        exported scene, cached as build/report/reference/<scene>_<W>x<H>_<samples>spp.npy keyed by the .blend's
-       content, so reruns skip it;
+       content, so reruns skip it (--reference-only stops here: references can be rendered ahead under any load,
+       as their quality is a sample count, and the timed steps below run later on a quiet machine);
     2. the paper's tables (HPG 2016 talk): methods cluster_cone (the paper's cluster-trivial), directional and
        tiled at 10k / 50k / 200k / 1M photons with the engine's automatic radius for each count; one-shot renders;
     3. progressive splatting of every method (brute excepted) for a time budget, the mean measured after every
@@ -135,6 +136,8 @@ def measure_scene(args):
     # 1. the reference
     reference, record["reference"] = reference_image(core, frame, name, blend, caustic, args)
     np.save(out / "reference.npy", reference)
+    if args.reference_only:
+        return
 
     # 2. one-shot renders shaped like the paper's tables
     snapshots = {}
@@ -287,6 +290,20 @@ def first_time_reaching(curve, ssim):
     return None
 
 
+def interpolated_time_reaching(curve, ssim):
+    """Where a curve measured on a grid (Cycles: samples ×2) crosses `ssim`: log-time interpolated linearly in SSIM
+    between the last point below and the first at or above it. The grid's own time is an upper bound within 2×;
+    this is the fairer estimate. None when the curve never reaches it; the first point's time when it starts there."""
+    for i, p in enumerate(curve):
+        if p["ssim"] >= ssim:
+            if i == 0:
+                return p["seconds"]
+            q = curve[i - 1]
+            f = (ssim - q["ssim"]) / (p["ssim"] - q["ssim"]) if p["ssim"] > q["ssim"] else 1.0
+            return math.exp(math.log(q["seconds"]) + f * (math.log(p["seconds"]) - math.log(q["seconds"])))
+    return None
+
+
 def ssim_at(curve, seconds):
     """SSIM of the last mean done by `seconds`; None when the run's budget ended well before (a time-limited run
     stops a pass short of its budget: within 25 % counts as having reached it)."""
@@ -333,15 +350,14 @@ def write_outputs(args):
                               f"{c['ssim']:.5f}", f"{c['psnr']:.3f}", f"{c['relmse']:.6g}", f"{c['rmse']:.6g}"])
 
     lines = ["# Speed against error: report", "",
-             "Regenerate with `bash tools/run_report.sh` (see its header; 12 minutes on 2 cores with the references, "
-             "about 7 without). Every figure "
+             "Regenerate with `bash tools/run_report.sh` (see its header for how long it takes). Every figure "
              "is measured against a converged reference of the same exported scene at the same resolution. SSIM "
              "and PSNR are on the display luma (linear → clamp [0, 1] → sRGB), relMSE on linear radiance "
              "(ε = 1e-2). Times are wall-clock seconds on this machine, shared with other jobs: the load average "
              "is given per scene, and figures taken under load are slower than the machine can do.", ""]
     headline = ["## Headline: progressive splatting against Cycles on the caustic scenes", "",
                 "| scene | progressive SSIM at 1 s / 5 s / 30 s | Cycles time to the same SSIM | "
-                f"progressive time to SSIM {SSIM_GOAL} | Cycles time to SSIM {SSIM_GOAL} | ratio |",
+                f"progressive time to SSIM {SSIM_GOAL} | Cycles time to SSIM {SSIM_GOAL} (grid; interpolated) | ratio |",
                 "|---|---|---|---|---|---|"]
     body = []
     for r in records:
@@ -404,8 +420,9 @@ def write_outputs(args):
                 cells.append(f"{s:.3f}")
                 matches.append(f"{t:g} s → {fmt_time(ct, cap)}")
             tp, tc = first_time_reaching(prog, SSIM_GOAL), first_time_reaching(cyc, SSIM_GOAL)
+            ti = interpolated_time_reaching(cyc, SSIM_GOAL)
             if tp is not None and tc is not None:
-                ratio = f"{tc / tp:.0f}×"
+                ratio = f"{tc / tp:.0f}× ({ti / tp:.0f}× interpolated)"
             elif tp is not None:
                 ratio = f"> {cap / tp:.0f}× (Cycles did not reach it)"
             else:
@@ -413,8 +430,9 @@ def write_outputs(args):
             body += ["", f"Cycles needs, for the SSIM progressive `cluster_cone` reaches in "
                      + "; ".join(matches) + f" (grid: samples ×2, so Cycles' times are upper bounds within a "
                      "factor of about 2).", ""]
+            interpolated = f"; {fmt_time(ti)}" if ti is not None else ""
             headline.append(f"| `{name}` | {' / '.join(cells)} | {'; '.join(matches)} | {fmt_time(tp)} | "
-                            f"{fmt_time(tc, cap)} | {ratio} |")
+                            f"{fmt_time(tc, cap)}{interpolated} | {ratio} |")
         plot_path = docs / f"report_{name}.png"
         plot_scene(plt, r, curves, plot_path)
         crops_path = docs / f"report_crops_{name}.png"
@@ -523,8 +541,12 @@ def parse_args():
                         help="photons per progressive pass (fewer, cheaper passes reach SSIM 0.9 sooner: docs/results)")
     parser.add_argument("--reference-samples", type=int, default=4096, help="reference passes (1 path/pixel each)")
     parser.add_argument("--reference-photons", type=int, default=100_000, help="caustic photons per reference pass")
-    parser.add_argument("--reference-seconds", type=float, default=150.0,
-                        help="time cap of one reference (it stops after the pass that reaches it)")
+    parser.add_argument("--reference-seconds", type=float, default=0.0,
+                        help="time cap of one reference (it stops after the pass that reaches it); 0 = none, so the "
+                             "reference's quality is --reference-samples whatever the machine's load")
+    parser.add_argument("--reference-only", action="store_true",
+                        help="render (or find in the cache) the reference and stop: references can be made ahead, "
+                             "under any load, and the timed measurements run later on a quiet machine")
     parser.add_argument("--cycles-max-samples", type=int, default=65536)
     parser.add_argument("--cycles-max-seconds", type=float, default=45.0,
                         help="stop Cycles' sample doubling after a render that took longer than this")

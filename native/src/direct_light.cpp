@@ -42,7 +42,9 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
             const glm::vec3 x = s.position + samples.origin;
-            Rng rng(settings.seed, RngDomain::direct_light, s.pixel);
+            // A pixel's second sample (the reflected branch at glass) draws its own numbers.
+            Rng rng(settings.seed, RngDomain::direct_light,
+                    uint64_t(s.pixel) + ((s.flags & kReflectedBranch) ? (uint64_t(1) << 32) : 0));
             const bool glossy = (s.flags & kGlossy) != 0;
             const glm::vec3 diffuse = s.albedo * inv_pi;
             // Σ over lights of incident radiance × cos, weighted by the BRDF where it depends on the direction

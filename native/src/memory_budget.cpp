@@ -89,12 +89,12 @@ void MemoryBudget::release(const std::string& structure) {
 
 double predict_view_sample_bytes(int width, int height) {
     const double pixels = double(width) * double(height);
-    // sample, emission, alpha, first hit's normal and depth
+    // a sample, emission, alpha, first hit's normal and depth
     return pixels * double(sizeof(ViewSample) + 2 * sizeof(glm::vec3) + 2 * sizeof(float));
 }
 
 double predict_view_sample_scratch_bytes(int width, int height) {
-    return double(width) * double(height) * double(sizeof(ViewSample) + 1);  // per-pixel samples and flags
+    return double(width) * double(height) * double(sizeof(ViewSample));  // the bands' samples before they are joined
 }
 
 double predict_per_sample_light_bytes(size_t samples) { return double(samples) * double(sizeof(glm::vec3)); }
@@ -210,12 +210,12 @@ SplatMemory predict_splat_memory(SplatMethod method, size_t samples, size_t phot
 
 void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camera, const RenderSettings& settings) {
     const int w = camera.width(), h = camera.height();
-    const size_t pixels = size_t(w) * size_t(h);
+    const size_t samples = size_t(w) * size_t(h);  // one a pixel; reserve_split_samples adds the rest
     budget.reserve("embree_scene", predict_embree_bytes(scene), "the scene's triangle count");
     budget.reserve("view_samples", predict_view_sample_bytes(w, h), "resolution");
     budget.reserve("view_sample_scratch", predict_view_sample_scratch_bytes(w, h), "resolution");
     budget.release("view_sample_scratch");
-    budget.reserve("direct_light", predict_per_sample_light_bytes(pixels), "resolution");
+    budget.reserve("direct_light", predict_per_sample_light_bytes(samples), "resolution");
     // Aimed photons (caustic_aim.h) store at most one photon each.
     bool specular = false;
     for (const Material& m : scene.materials()) specular = specular || m.is_specular();
@@ -228,17 +228,35 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     budget.release("photon_trace_scratch");
     if (settings.method == SplatMethod::cluster || settings.method == SplatMethod::cluster_cone ||
         settings.method == SplatMethod::directional)
-        budget.reserve("hierarchy", predict_hierarchy_bytes(pixels), "resolution");
-    if (settings.method == SplatMethod::cluster_cone) budget.reserve("cones", predict_cone_bytes(pixels), "resolution");
+        budget.reserve("hierarchy", predict_hierarchy_bytes(samples), "resolution");
+    if (settings.method == SplatMethod::cluster_cone) budget.reserve("cones", predict_cone_bytes(samples), "resolution");
     if (settings.method == SplatMethod::directional)
-        budget.reserve("leaf_summaries", predict_leaf_summary_bytes(pixels), "resolution");
-    budget.reserve("indirect_light", predict_per_sample_light_bytes(pixels), "resolution");
+        budget.reserve("leaf_summaries", predict_leaf_summary_bytes(samples), "resolution");
+    budget.reserve("indirect_light", predict_per_sample_light_bytes(samples), "resolution");
     if (settings.caustics_pass) {
         // The caustic photons copied out of the map, and their own splat's light.
         budget.reserve("caustic_photons", photon_map, "photons");
-        budget.reserve("caustic_light", predict_per_sample_light_bytes(pixels), "resolution");
+        budget.reserve("caustic_light", predict_per_sample_light_bytes(samples), "resolution");
     }
     budget.reserve("image", predict_image_bytes(w, h, settings.caustics_pass), "resolution");
+}
+
+void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples) {
+    if (samples <= pixels) return;
+    // Each per-sample structure grows by what its prediction for `samples` adds to the one for `pixels`, recorded
+    // under its own name (so every structure's prediction still bounds what it measures).
+    const auto grow = [&](const char* structure, double (*predict)(size_t)) {
+        budget.reserve(structure, predict(samples) - predict(pixels), "resolution");
+    };
+    budget.reserve("view_samples", double(samples - pixels) * double(sizeof(ViewSample)), "resolution");
+    grow("direct_light", predict_per_sample_light_bytes);
+    if (settings.method == SplatMethod::cluster || settings.method == SplatMethod::cluster_cone ||
+        settings.method == SplatMethod::directional)
+        grow("hierarchy", predict_hierarchy_bytes);
+    if (settings.method == SplatMethod::cluster_cone) grow("cones", predict_cone_bytes);
+    if (settings.method == SplatMethod::directional) grow("leaf_summaries", predict_leaf_summary_bytes);
+    grow("indirect_light", predict_per_sample_light_bytes);
+    if (settings.caustics_pass) grow("caustic_light", predict_per_sample_light_bytes);
 }
 
 void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,

@@ -115,6 +115,7 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
         view_settings.jitter = pass.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
+        reserve_split_samples(budget, settings, pixels, samples.samples.size());
 
         control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
@@ -244,10 +245,10 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
         }
         for (size_t i = 0; i < samples.samples.size(); ++i) {
             const size_t p = samples.samples[i].pixel;
-            for (int c = 0; c < 3; ++c) {
-                result.direct[3 * p + c] = direct[i][c];
-                result.indirect[3 * p + c] = indirect[i][c];
-                if (settings.caustics_pass) result.caustics[3 * p + c] = caustic[i][c];
+            for (int c = 0; c < 3; ++c) {  // a pixel's samples add up (view_samples.h)
+                result.direct[3 * p + c] += direct[i][c];
+                result.indirect[3 * p + c] += indirect[i][c];
+                if (settings.caustics_pass) result.caustics[3 * p + c] += caustic[i][c];
             }
         }
         for (size_t p = 0; p < pixels; ++p) {

@@ -130,24 +130,53 @@ static float fresnel_dielectric(float cos_i, float eta, float& cos_t) {
     return 0.5f * (r_s * r_s + r_p * r_p);
 }
 
-SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
-                              float u) {
+namespace {
+
+// What a glass surface does to a ray arriving along `direction`: both directions and the Fresnel reflectance
+// (1 under total internal reflection, when `refracted` is unused).
+struct GlassBranches {
+    glm::vec3 reflected, refracted;
+    float reflectance;
+};
+
+GlassBranches glass_branches(const Material& material, const SurfacePoint& surface, const glm::vec3& direction) {
     const glm::vec3 n = surface.shading_normal;  // faces the incoming ray
     const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
-    const glm::vec3 reflected = glm::normalize(direction + 2.0f * cos_i * n);
-    if (material.kind != MaterialKind::glass) {
-        // Mirror, or glossy smooth enough to be one: Fresnel-Schlick with the metal's tint as F0.
-        const float m = std::pow(1.0f - cos_i, 5.0f);
-        return {reflected, surface.color + (glm::vec3(1.0f) - surface.color) * m, false};
-    }
-    // Glass: entering the front face goes from air (1) into the material (ior); leaving goes back out.
+    GlassBranches b;
+    b.reflected = glm::normalize(direction + 2.0f * cos_i * n);
+    // Entering the front face goes from air (1) into the material (ior); leaving goes back out.
     const float eta = surface.entering ? 1.0f / material.ior : material.ior;
     float cos_t = 0.0f;
-    const float reflectance = fresnel_dielectric(cos_i, eta, cos_t);
-    if (u < reflectance) return {reflected, glm::vec3(1.0f), false};
+    b.reflectance = fresnel_dielectric(cos_i, eta, cos_t);
     // Radiance's (n_t/n_i)² factor is left out: it cancels on the way in and out of closed objects.
-    const glm::vec3 refracted = glm::normalize(eta * direction + (eta * cos_i - cos_t) * n);
-    return {refracted, surface.color, true};
+    b.refracted = b.reflectance < 1.0f ? glm::normalize(eta * direction + (eta * cos_i - cos_t) * n) : b.reflected;
+    return b;
+}
+
+}  // namespace
+
+SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
+                              float u) {
+    if (material.kind != MaterialKind::glass) {
+        // Mirror, or glossy smooth enough to be one: Fresnel-Schlick with the metal's tint as F0.
+        const glm::vec3 n = surface.shading_normal;
+        const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
+        const float m = std::pow(1.0f - cos_i, 5.0f);
+        return {glm::normalize(direction + 2.0f * cos_i * n), surface.color + (glm::vec3(1.0f) - surface.color) * m,
+                false};
+    }
+    const GlassBranches b = glass_branches(material, surface, direction);
+    if (u < b.reflectance) return {b.reflected, glm::vec3(1.0f), false};
+    return {b.refracted, surface.color, true};
+}
+
+SpecularSplit split_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction) {
+    if (material.kind != MaterialKind::glass) return {scatter_specular(material, surface, direction, 0.0f), {}, false};
+    const GlassBranches b = glass_branches(material, surface, direction);
+    if (!(b.reflectance < 1.0f)) return {{b.reflected, glm::vec3(1.0f), false}, {}, false};
+    return {{b.reflected, glm::vec3(b.reflectance), false},
+            {b.refracted, (1.0f - b.reflectance) * surface.color, true},
+            true};
 }
 
 GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,

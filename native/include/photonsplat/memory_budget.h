@@ -52,6 +52,12 @@ private:
 // allocates anything, so a frame that cannot fit is refused at once.
 void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
+// A frame whose camera paths split at glass (view_samples.h) has more view samples than pixels: reserves what the
+// samples beyond one a pixel add to every per-sample structure reserve_frame counted. Called once their number is
+// known, right after the view samples stage (so their own bytes are counted just after they were allocated;
+// they are at most one more sample a pixel).
+void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples);
+
 // Refuses (InvalidInput, as reserve does) a frame that would not fit, before anything is allocated; for a caller
 // that holds `extra_bytes_per_pixel` beside each pass's buffers (the progressive render's running sums).
 void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,
@@ -59,7 +65,7 @@ void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSe
 
 // --- predictions, in bytes (each the structure as Stats::bytes names it) -----------------------------------
 
-// View samples (pixels × (sample + emission + alpha), samples <= pixels) and the per-pixel scratch of their stage.
+// View samples, one a pixel, with the per-pixel emission, alpha and first hit, and the scratch of their stage.
 double predict_view_sample_bytes(int width, int height);
 double predict_view_sample_scratch_bytes(int width, int height);
 // Direct light and splatted indirect light per view sample, and the frame's RGBA + three component buffers.

@@ -52,6 +52,17 @@ struct SpecularStep {
 SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
                               float u);
 
+// Both branches of a glass surface at once, for camera paths that follow each (view_samples.cpp): the reflected
+// one weighted by the Fresnel reflectance F, the refracted one by (1 − F) × tint, so their weighted sum is what
+// scatter_specular returns on average. `both` is false where only one branch exists (total internal reflection,
+// or a mirror): then `reflected` holds scatter_specular's single step and `transmitted` is unused.
+struct SpecularSplit {
+    SpecularStep reflected;
+    SpecularStep transmitted;
+    bool both;
+};
+SpecularSplit split_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction);
+
 // One step off a glossy surface (Material::is_glossy()): the new direction importance-samples the GGX lobe
 // (brdf.h) around the shading normal (the geometric one where the shading normal faces away from the arriving
 // ray) for the arriving `direction` (travel direction of the ray), which holds for photons as well as for

@@ -1,5 +1,7 @@
 // Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors and glass to the first
-// non-specular hit. That hit is the pixel's view sample: what photons are later splatted onto.
+// non-specular hit. That hit is the pixel's view sample: what photons are later splatted onto. Where the ray
+// meets glass, it is split once: the refracted and the reflected path each end in a view sample of the pixel,
+// weighted by Fresnel, so a pixel has one or two samples.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -17,6 +19,7 @@ struct Stats;
 enum ViewSampleFlags : uint32_t {
     kViaSpecular = 1u,  // the camera path bounced off a mirror or through glass before reaching it
     kGlossy = 2u,       // the surface has a glossy lobe (specular > 0): its BRDF depends on the directions
+    kReflectedBranch = 4u,  // the second sample of its pixel: the reflected branch of the camera path's first glass
 };
 
 struct ViewSample {
@@ -27,7 +30,8 @@ struct ViewSample {
     glm::vec3 albedo;          // diffuse reflectance: the diffuse lobe is albedo / π
     glm::vec3 specular;        // glossy lobe's Fresnel F0 tint; 0 for a purely diffuse surface
     float roughness;           // glossy lobe's GGX α (Blender roughness²); unused when specular is 0
-    glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit)
+    glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit); a pixel's
+                               // radiance is the sum over its samples of throughput × what reaches the sample
     uint32_t pixel;            // y * width + x, y = 0 at the top
     uint32_t flags;            // ViewSampleFlags
     float depth;               // view depth of the FIRST hit of the pixel's camera ray (for cluster keys)
@@ -37,7 +41,8 @@ struct ViewSample {
 struct ViewSamples {
     int width = 0, height = 0;
     glm::vec3 origin{0.0f};             // render-space position (scene.h) sample positions are relative to (the camera)
-    std::vector<ViewSample> samples;    // at most one per pixel, in pixel order
+    std::vector<ViewSample> samples;    // in pixel order; one per pixel, two where the camera path split at glass
+                                        // (refracted first), none where it escaped, was cut out or was dropped
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
     // Of the FIRST surface each camera ray hits (glass and mirrors included), as Cycles' Normal and Depth passes:
@@ -54,6 +59,9 @@ struct ViewSampleSettings {
     // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
     // mean is box-filtered over each pixel (anti-aliasing).
     bool jitter = false;
+    // Follow both the reflected and the refracted ray at a camera path's first glass surface (two samples for the
+    // pixel), instead of one chosen with its Fresnel probability.
+    bool split_at_glass = true;
 };
 
 ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,
