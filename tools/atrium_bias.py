@@ -43,6 +43,8 @@ def main(argv):
     parser.add_argument("--reference-bounces", type=int, default=None,
                         help="one reference max_bounces for every --bounces value (default: the same b)")
     parser.add_argument("--reference-seed", type=int, default=7)
+    parser.add_argument("--reference-npy", default="",
+                        help="a saved reference of the same size, used instead of rendering one (then SSIM is printed)")
     parser.add_argument("--photons", type=int, default=200_000)
     parser.add_argument("--radii", type=float, nargs="+", default=[0.0])
     parser.add_argument("--method", default="cluster_cone")
@@ -74,9 +76,11 @@ def main(argv):
     for b in args.bounces:
         rb = args.reference_bounces if args.reference_bounces is not None else b
         started = time.perf_counter()
-        reference, _ = core.render_reference(frame.scene, frame.camera, samples=args.reference_samples,
-                                             seed=args.reference_seed,
-                                             max_bounces=rb)
+        if args.reference_npy:
+            reference = np.load(args.reference_npy)
+        else:
+            reference, _ = core.render_reference(frame.scene, frame.camera, samples=args.reference_samples,
+                                                 seed=args.reference_seed, max_bounces=rb)
         ref_mean = mean(reference)
         print(f"reference b={rb}: mean {ref_mean:.5f} ({time.perf_counter() - started:.1f} s)", flush=True)
         saved[f"reference_b{rb}"] = np.asarray(reference)
@@ -93,7 +97,8 @@ def main(argv):
             print(f"  splat b={b} r={used:.4g} photons={args.photons}: mean {mean(image):.5f} "
                   f"ratio {mean(image) / ref_mean:.4f}  " +
                   " ".join(f"{k} {v:.5f}" for k, v in parts.items()) +
-                  f"  stored {stats['counters'].get('photons_stored', 0):.0f}", flush=True)
+                  f"  stored {stats['counters'].get('photons_stored', 0):.0f}" +
+                  (f"  SSIM {float(core.ssim(image, reference)):.4f}" if args.reference_npy else ""), flush=True)
             key = f"splat_b{b}_r{radius:g}"
             saved[key] = np.asarray(image)
             for k in ("emission", "direct", "indirect", "caustics", "depth", "normal"):
