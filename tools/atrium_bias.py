@@ -4,9 +4,11 @@
     BLENDER_USER_SCRIPTS=build/blender blender -b --factory-startup -noaudio --addons photonsplat \\
         blend_scenes/atrium.blend --python tools/atrium_bias.py -- --width 64 --lights sun --bounces 1 2 8
 
-For every --bounces value b it renders the same exported frame with render_reference(max_bounces=b) and with
-one-shot splatting (max_bounces=b, --photons, each --radii value; 0 = the automatic radius) and prints the mean
-linear radiance of each, splatting split into emission / direct / indirect / caustics. --lights picks which
+For every --bounces value b it renders the same exported frame with render_reference(max_bounces=b, or
+--reference-bounces; --reference-npy loads a saved one instead and adds SSIM) and with splatting (max_bounces=b,
+--photons, each --radii value, 0 = the automatic radius; one-shot, or --passes jittered passes with --alpha 1
+for a fixed radius and a box filter like the reference's) and prints the mean linear radiance of each,
+splatting split into emission / direct / indirect / caustics. --lights picks which
 light sources stay: all, sun (the world made black) or world (the sun's strength set to 0). The images go to
 --save (npz) for per-region analysis.
 
