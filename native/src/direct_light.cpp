@@ -1,6 +1,8 @@
 #include "photonsplat/direct_light.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
 
 #include <glm/geometric.hpp>
@@ -19,6 +21,31 @@
 #include "photonsplat/view_samples.h"
 
 namespace ps {
+
+namespace {
+
+// A light's samples at a view sample are stratified over the (u1, u2) square its sampling maps to a point or a
+// direction: a √n × √n jittered grid when n is a square (the default 4: 2 × 2), else n strips along u1. Each
+// sample stays uniform within its cell and the cells are equal, so the estimate keeps its expectation; what
+// changes is that the n samples cover the light (or the sky's hemisphere) evenly instead of clumping, which
+// lowers the noise of partly hidden lights: soft shadows, the sky seen through an opening.
+struct StrataGrid {
+    int columns = 1, rows = 1;
+    void place(int k, float& u1, float& u2) const {
+        if (columns * rows == 1) return;
+        constexpr float kBelowOne = 0x1.fffffep-1f;  // (cell + u) / cells may round up to 1 otherwise
+        u1 = std::min((static_cast<float>(k % columns) + u1) / static_cast<float>(columns), kBelowOne);
+        u2 = std::min((static_cast<float>(k / columns) + u2) / static_cast<float>(rows), kBelowOne);
+    }
+};
+
+StrataGrid strata_grid(int n) {
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n))));
+    if (side * side == n) return {side, side};
+    return {n, 1};
+}
+
+}  // namespace
 
 std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
@@ -52,9 +79,12 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             glm::vec3 sum(0.0f);
             for (size_t l = 0; l < sources.size(); ++l) {
                 const int n = sources.is_delta(l) ? 1 : settings.samples_per_light;
+                const StrataGrid grid = strata_grid(n);
                 glm::vec3 light_sum(0.0f);
                 for (int k = 0; k < n; ++k) {
-                    const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+                    float u1 = rng.uniform(), u2 = rng.uniform();
+                    const float u3 = rng.uniform();
+                    grid.place(k, u1, u2);
                     if (glossy && sources.is_world(l)) {
                         // A glossy lobe under the sky: the world's cosine-weighted directions would almost never
                         // fall into a sharp lobe, so the lobe samples its own directions (weight f·cos/pdf), and

@@ -114,3 +114,55 @@ TEST(DirectLight, UniformSkyOverAPlaneGivesAlbedoTimesSkyRadiance) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace ps;
+
+// Per-pixel variance over seeds of the direct light from a sky seen through a square opening in a roof, with
+// `samples` shadow rays a view sample.
+double sky_through_opening_variance(int samples) {
+    Scene scene;
+    scene.add_material({"floor", MaterialKind::diffuse, glm::vec3(0.5f), 1.45f, glm::vec3(0.0f)});
+    test::add_quad(scene, "floor", {-4, -4, 0}, {4, -4, 0}, {4, 4, 0}, {-4, 4, 0}, 0);
+    // A roof at height 1 with a 1 m square opening above the origin (four quads around it, facing down).
+    const float z = 1.0f;
+    test::add_quad(scene, "roof_w", {-4, -4, z}, {-4, 4, z}, {-0.5f, 4, z}, {-0.5f, -4, z}, 0);
+    test::add_quad(scene, "roof_e", {0.5f, -4, z}, {0.5f, 4, z}, {4, 4, z}, {4, -4, z}, 0);
+    test::add_quad(scene, "roof_s", {-0.5f, -4, z}, {-0.5f, -0.5f, z}, {0.5f, -0.5f, z}, {0.5f, -4, z}, 0);
+    test::add_quad(scene, "roof_n", {-0.5f, 0.5f, z}, {-0.5f, 4, z}, {0.5f, 4, z}, {0.5f, 0.5f, z}, 0);
+    scene.set_background(glm::vec3(1.0f));
+    const Camera camera = test::look_at({0, 0, 0.9f}, {0, 0, 0}, 16, 16, 90.0f, {0, 1, 0});
+    RenderControl control;
+    Stats stats;
+    const ViewSamples vs = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    constexpr int kSeeds = 64;
+    std::vector<double> sum(vs.samples.size(), 0.0), sum2(vs.samples.size(), 0.0);
+    for (int seed = 0; seed < kSeeds; ++seed) {
+        DirectLightSettings settings;
+        settings.seed = uint64_t(seed);
+        settings.samples_per_light = samples;
+        const std::vector<glm::vec3> direct = compute_direct_light(scene, vs, settings, control, stats);
+        for (size_t i = 0; i < direct.size(); ++i) {
+            sum[i] += direct[i].x;
+            sum2[i] += double(direct[i].x) * direct[i].x;
+        }
+    }
+    double variance = 0.0;
+    for (size_t i = 0; i < sum.size(); ++i) variance += sum2[i] / kSeeds - (sum[i] / kSeeds) * (sum[i] / kSeeds);
+    return variance / double(sum.size());
+}
+
+TEST(DirectLight, ShadowRaysOfALightAreStratified) {
+    // n independent rays would have 1/n of one ray's variance; stratified over the light's sampling square they
+    // cover the opening evenly and do better where visibility changes smoothly with direction (measured: 0.83 of
+    // that with 4 rays, 0.60 with 16; the strata of 4 are coarse rings and half-discs of the hemisphere).
+    const double one = sky_through_opening_variance(1);
+    const double four = sky_through_opening_variance(4);
+    const double sixteen = sky_through_opening_variance(16);
+    ASSERT_GT(one, 0.0);
+    EXPECT_LT(four, 0.92 * one / 4.0) << "one ray " << one << ", four " << four;
+    EXPECT_LT(sixteen, 0.75 * one / 16.0) << "one ray " << one << ", sixteen " << sixteen;
+}
+
+}  // namespace
