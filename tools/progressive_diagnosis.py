@@ -51,6 +51,7 @@ def main(argv):
     parser.add_argument("--radius", type=float, default=0.0)
     parser.add_argument("--aimed-photons", type=float, default=None, help="default: the core's")
     parser.add_argument("--passes", type=int, default=8)
+    parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--method", default="cluster_cone")
     parser.add_argument("--split", type=int, default=0, help="save the components after this many passes")
     parser.add_argument("--save", default="build/diagnosis.npz")
@@ -60,7 +61,7 @@ def main(argv):
     aspect = scene.render.resolution_y / scene.render.resolution_x
     scene.render.resolution_x, scene.render.resolution_y = args.width, int(round(args.width * aspect))
     scene.render.resolution_percentage = 100
-    scene.photonsplat.seed, scene.photonsplat.radius, scene.photonsplat.passes = 1, 0.0, 1
+    scene.photonsplat.seed, scene.photonsplat.radius, scene.photonsplat.passes = args.seed, 0.0, 1
     frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
     reference = area_resample(np.load(args.reference), args.width)
 
