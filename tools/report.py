@@ -313,6 +313,11 @@ def ssim_at(curve, seconds):
     return reached[-1]["ssim"]
 
 
+def ratio_text(r):
+    """A speed ratio: whole numbers from 10 up, two significant digits below (0.14× is Cycles being faster)."""
+    return f"{r:.0f}×" if r >= 10 else f"{r:.2g}×"
+
+
 def fmt_time(t, cap=None):
     if t is None:
         return f"> {fmt_time(cap)} (not reached)" if cap is not None else "not reached"
@@ -422,9 +427,9 @@ def write_outputs(args):
             tp, tc = first_time_reaching(prog, SSIM_GOAL), first_time_reaching(cyc, SSIM_GOAL)
             ti = interpolated_time_reaching(cyc, SSIM_GOAL)
             if tp is not None and tc is not None:
-                ratio = f"{tc / tp:.0f}× ({ti / tp:.0f}× interpolated)"
+                ratio = f"{ratio_text(tc / tp)} ({ratio_text(ti / tp)} interpolated)"
             elif tp is not None:
-                ratio = f"> {cap / tp:.0f}× (Cycles did not reach it)"
+                ratio = f"> {ratio_text(cap / tp)} (Cycles did not reach it)"
             else:
                 ratio = "progressive did not reach it"
             body += ["", f"Cycles needs, for the SSIM progressive `cluster_cone` reaches in "
