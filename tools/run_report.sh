@@ -5,8 +5,8 @@
 # plain Python writes the tables and plots. Then the caustic scenes once more at 256 pixels wide, into
 # docs/results/caustic_256/. References (4096 samples per pixel, however long that takes) are cached under
 # build/report*/reference/ keyed by each .blend's content, so a rerun skips them; they can be made ahead, under
-# any load, with `measure --reference-only`. Measured on the project's 2-core machine: about 35 minutes for the
-# references the first time, then about 25 minutes for the measurements; run the measurements on a quiet
+# any load, with `measure --reference-only`. Measured on the project's 2-core machine: about 50 minutes for the
+# references the first time (under load), then 21 minutes for the measurements; run the measurements on a quiet
 # machine (every report states its load average). Run after scripts/build.sh. Extra arguments go to every
 # measure run (e.g. --seconds 3 --no-cycles; see tools/report.py --help).
 set -euo pipefail
