@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <limits>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -47,11 +48,11 @@ struct FirstHit {
 // (diffuse or glossy) hit; adds emission and background seen along the way to `emitted`. The first hit (depth 0)
 // fills `first` (left untouched when the ray escapes). At its first glass surface, if `branch` is not null and
 // the glass both reflects and refracts there, the path follows the refracted ray and leaves the reflected one,
-// with its Fresnel weight, in *branch (set_branch = true): the pixel then averages both instead of one chosen at
-// random, which removes the speckle of glass (a reflection of the bright room in some pixels, the view through
-// the glass in their neighbours) that would otherwise take many passes to average out.
+// with its Fresnel weight, in *branch: the pixel then averages both instead of one chosen at random, which
+// removes the speckle of glass (a reflection of the bright room in some pixels, the view through the glass in
+// their neighbours) that would otherwise take many passes to average out.
 bool trace_camera_path(const Scene& scene, const Camera& camera, CameraPath path, Rng& rng, int max_specular_depth,
-                       ViewSample& sample, glm::vec3& emitted, FirstHit& first, CameraPath* branch, bool& set_branch) {
+                       ViewSample& sample, glm::vec3& emitted, FirstHit& first, std::optional<CameraPath>* branch) {
     const RayTracer& tracer = scene.ray_tracer();
     for (;; ++path.depth) {
         const Ray& ray = path.ray;
@@ -105,10 +106,10 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, CameraPath path
             const SpecularSplit split = split_specular(*s.material, s, ray.direction);
             if (split.both) {
                 const glm::vec3 reflected = path.throughput * split.reflected.weight;
-                *branch = {Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
-                               split.reflected.direction},
-                           reflected, path.depth + 1};
-                set_branch = reflected.x > 0.0f || reflected.y > 0.0f || reflected.z > 0.0f;
+                if (reflected.x > 0.0f || reflected.y > 0.0f || reflected.z > 0.0f)
+                    *branch = CameraPath{Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
+                                             split.reflected.direction},
+                                         reflected, path.depth + 1};
                 step = split.transmitted;
             } else {
                 step = split.reflected;
@@ -175,24 +176,19 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                     ViewSample sample;
                     sample.pixel = static_cast<uint32_t>(pixel);
                     FirstHit first;
-                    CameraPath reflected{};
-                    bool split = false;
+                    std::optional<CameraPath> reflected;
                     if (trace_camera_path(scene, camera, start, rng, settings.max_specular_depth, sample,
-                                          out.emission[pixel], first, settings.split_at_glass ? &reflected : nullptr,
-                                          split)) {
+                                          out.emission[pixel], first, settings.split_at_glass ? &reflected : nullptr)) {
                         sample.depth = first.depth;
                         sample.position -= out.origin;
                         found.push_back(sample);
                     }
-                    if (split) {
-                        bool unused = false;
-                        if (trace_camera_path(scene, camera, reflected, rng, settings.max_specular_depth, sample,
-                                              out.emission[pixel], first, nullptr, unused)) {
-                            sample.depth = first.depth;
-                            sample.position -= out.origin;
-                            sample.flags |= kReflectedBranch;
-                            found.push_back(sample);
-                        }
+                    if (reflected && trace_camera_path(scene, camera, *reflected, rng, settings.max_specular_depth,
+                                                       sample, out.emission[pixel], first, nullptr)) {
+                        sample.depth = first.depth;
+                        sample.position -= out.origin;
+                        sample.flags |= kReflectedBranch;
+                        found.push_back(sample);
                     }
                     out.alpha[pixel] = first.alpha;
                     out.first_normal[pixel] = first.normal;
