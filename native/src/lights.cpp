@@ -171,9 +171,11 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
 LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3& direction) {
     LightHit out;
     switch (light.kind) {
-        case LightKind::point: {
+        case LightKind::point:
+        case LightKind::spot: {
             if (!(light.radius > 0.0f)) return out;
-            // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²).
+            // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²) (a spot's
+            // times its cone's attenuation towards x).
             const glm::vec3 from_light = x - light.position;
             const float d = glm::length(from_light);
             if (!(d > light.radius)) return out;  // x inside the light: it samples no disc either
@@ -184,7 +186,9 @@ LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3
             const glm::vec3 offset = x + t * direction - light.position;
             if (!(glm::dot(offset, offset) < light.radius * light.radius)) return out;
             const float area = kPi * light.radius * light.radius;
-            out = {true, t, light.value / area, t * t / (cos_light * area)};
+            glm::vec3 radiance = light.value / area;
+            if (light.kind == LightKind::spot) radiance *= light.spot_attenuation(-direction);
+            out = {true, t, radiance, t * t / (cos_light * area)};
             return out;
         }
         case LightKind::sun: {

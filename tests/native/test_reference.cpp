@@ -21,7 +21,7 @@ using namespace ps;
 // For every light with a size: the direction sample_light_incidence draws, traced back with intersect_light,
 // hits the light at the sampled distance with the same density, and radiance / pdf = value.
 TEST(Reference, LightHitsAgreeWithLightSampling) {
-    std::vector<Light> lights(3);
+    std::vector<Light> lights(4);
     lights[0].kind = LightKind::point;
     lights[0].position = {0.2f, 0.1f, 2.0f};
     lights[0].radius = 0.3f;
@@ -35,6 +35,13 @@ TEST(Reference, LightHitsAgreeWithLightSampling) {
     lights[2].direction = {0.3f, 0.2f, -1.0f};
     lights[2].angle = 0.1f;
     lights[2].value = glm::vec3(2.0f);
+    lights[3].kind = LightKind::spot;  // a spot with a size is a disc like the point light's, times its cone
+    lights[3].position = {0.4f, -0.3f, 1.8f};
+    lights[3].direction = glm::vec3(0.1f, -0.2f, 0.0f) - lights[3].position;
+    lights[3].radius = 0.25f;
+    lights[3].spot_size = 1.2f;
+    lights[3].spot_blend = 0.4f;
+    lights[3].value = glm::vec3(4.0f);
     const glm::vec3 x(0.1f, -0.2f, 0.0f);
     Rng rng(1, RngDomain::camera, 0);
     for (const Light& light : lights) {
