@@ -51,6 +51,11 @@ constexpr double kBytesPerPair = 9.0;
 // The cap never goes below this many pairs: below it the splat would run in thousands of batches.
 constexpr uint64_t kMinPairCap = uint64_t(1) << 20;
 
+// The methods that splat onto the view-sample cluster hierarchy (tiled, gather and brute do not build it).
+bool builds_hierarchy(SplatMethod method) {
+    return method == SplatMethod::cluster || method == SplatMethod::cluster_cone || method == SplatMethod::directional;
+}
+
 }  // namespace
 
 uint64_t available_memory_bytes() {
@@ -226,8 +231,7 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     // While tracing, the photons sit in per-chunk vectors (up to twice their size) before the map is filled.
     budget.reserve("photon_trace_scratch", 2.0 * photon_map, "photons");
     budget.release("photon_trace_scratch");
-    if (settings.method == SplatMethod::cluster || settings.method == SplatMethod::cluster_cone ||
-        settings.method == SplatMethod::directional)
+    if (builds_hierarchy(settings.method))
         budget.reserve("hierarchy", predict_hierarchy_bytes(samples), "resolution");
     if (settings.method == SplatMethod::cluster_cone) budget.reserve("cones", predict_cone_bytes(samples), "resolution");
     if (settings.method == SplatMethod::directional)
@@ -250,8 +254,7 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
     };
     budget.reserve("view_samples", double(samples - pixels) * double(sizeof(ViewSample)), "resolution");
     grow("direct_light", predict_per_sample_light_bytes);
-    if (settings.method == SplatMethod::cluster || settings.method == SplatMethod::cluster_cone ||
-        settings.method == SplatMethod::directional)
+    if (builds_hierarchy(settings.method))
         grow("hierarchy", predict_hierarchy_bytes);
     if (settings.method == SplatMethod::cluster_cone) grow("cones", predict_cone_bytes);
     if (settings.method == SplatMethod::directional) grow("leaf_summaries", predict_leaf_summary_bytes);
