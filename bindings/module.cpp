@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -248,6 +249,27 @@ PYBIND11_MODULE(_core, m) {
 
     m.def("default_memory_budget", &ps::default_memory_budget,
           "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");
+
+    m.def(
+        "automatic_radius",
+        [](const ps::Scene& scene, const ps::Camera& camera, uint64_t photons) {
+            py::gil_scoped_release release;
+            return ps::automatic_radius(scene, camera, photons);
+        },
+        "scene"_a, "camera"_a, "photons"_a,
+        "The kernel radius a render uses when settings.radius is 0: the scene's size scaled for the photon count, "
+        "shrunk (to a quarter at most) where the boundary bias of what the camera sees (boundary_loss) calls for it.");
+    m.def(
+        "boundary_loss",
+        [](const ps::Scene& scene, const ps::Camera& camera, float radius) {
+            if (!(std::isfinite(radius) && radius > 0.0f))
+                throw ps::InvalidInput("radius", "must be finite and > 0, got " + std::to_string(radius));
+            py::gil_scoped_release release;
+            return ps::boundary_loss(scene, camera, radius);
+        },
+        "scene"_a, "camera"_a, "radius"_a,
+        "The expected fraction of a kernel disc of this radius that falls off the surface it is centred on, "
+        "over what the camera sees (0..1): the boundary bias that limits the automatic radius.");
 
     bind_images(m);
     bind_metrics(m);

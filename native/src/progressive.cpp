@@ -46,7 +46,7 @@ ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, c
     validate(settings_);
     check_frame_memory(scene_, camera_, settings_, kSumBytesPerPixel);
     pixels_ = static_cast<size_t>(camera_.width()) * camera_.height();
-    first_radius_ = first_radius(scene_, settings_);
+    first_radius_ = first_radius(scene_, camera_, settings_);
     last_radius_ = first_radius_;
     radius_sq_ = static_cast<double>(first_radius_) * first_radius_;
 }

@@ -56,14 +56,6 @@ void validate(const RenderSettings& s) {
             "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
 }
 
-float default_radius(const Scene& scene, uint64_t photons) {
-    // About 1.5 % of the scene's diagonal at 200k photons, shrinking as 1/sqrt(N) so that a kernel disc
-    // holds roughly the same number of photons whatever the count.
-    const float diagonal = glm::length(scene.bounds_max() - scene.bounds_min());
-    const double n = static_cast<double>(std::max<uint64_t>(photons, 1));
-    return static_cast<float>(0.015 * diagonal * std::sqrt(200000.0 / n));
-}
-
 uint64_t pass_seed(uint64_t seed, uint32_t pass) {
     if (pass == 0) return seed;
     // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
@@ -74,8 +66,8 @@ uint64_t pass_seed(uint64_t seed, uint32_t pass) {
     return z ^ (z >> 31);
 }
 
-float first_radius(const Scene& scene, const RenderSettings& settings) {
-    return settings.radius > 0.0f ? settings.radius : default_radius(scene, settings.photons);
+float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings) {
+    return settings.radius > 0.0f ? settings.radius : automatic_radius(scene, camera, settings.photons);
 }
 
 RenderResult render_pass(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
@@ -274,7 +266,7 @@ RenderResult render(const Scene& scene, const Camera& camera, const RenderSettin
     validate(settings);
     if (settings.passes != 1) return render_progressive(scene, camera, settings, control);
     PassParams pass;
-    pass.radius = first_radius(scene, settings);
+    pass.radius = first_radius(scene, camera, settings);
     RenderResult result = render_pass(scene, camera, settings, pass, control);
     result.stats.values["passes"] = 1.0;
     return result;

@@ -37,7 +37,7 @@ TEST(Progressive, OnePassIsTheOneShotRenderBitForBit) {
     RenderSettings settings = small_settings();
     RenderControl control;
     PassParams pass0;
-    pass0.radius = first_radius(cornell(), settings);
+    pass0.radius = first_radius(cornell(), camera, settings);
     const RenderResult one_shot = render_pass(cornell(), camera, settings, pass0, control);
     const RenderResult rendered = render(cornell(), camera, settings, control);  // passes = 1
     ProgressiveRender progressive(cornell(), camera, settings);

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "photonsplat/camera.h"
+#include "photonsplat/kernel_radius.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
@@ -41,8 +42,6 @@ struct RenderSettings {
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field
 
-// The radius used when settings.radius is 0: a fraction of the scene's size, shrinking with photon count.
-float default_radius(const Scene& scene, uint64_t photons);
 
 struct RenderResult {
     int width = 0, height = 0;
@@ -67,8 +66,9 @@ struct PassParams {
 };
 uint64_t pass_seed(uint64_t seed, uint32_t pass);  // = seed for pass 0
 
-// The radius of pass 0 (settings.radius, or default_radius when that is 0).
-float first_radius(const Scene& scene, const RenderSettings& settings);
+// The radius of pass 0: settings.radius, or when that is 0 automatic_radius (kernel_radius.h), which depends on
+// what the camera sees.
+float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
 // One pass of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.
 RenderResult render_pass(const Scene& scene, const Camera& camera, const RenderSettings& settings,

@@ -14,6 +14,7 @@ enum class RngDomain : uint64_t {
     light_choice = 4,
     emission_guide = 5,
     pixel_jitter = 6,       // progressive passes after the first: where in its pixel a camera ray goes
+    kernel_probe = 7,       // automatic radius: the rotation of a seen point's probe pattern (kernel_radius.cpp)
     reference_path = 16,    // reference renderer: one camera path, keyed by pass × pixels + pixel
     reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
 };
