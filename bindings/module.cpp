@@ -257,8 +257,9 @@ PYBIND11_MODULE(_core, m) {
             return ps::automatic_radius(scene, camera, photons);
         },
         "scene"_a, "camera"_a, "photons"_a,
-        "The kernel radius a render uses when settings.radius is 0: the scene's size scaled for the photon count, "
-        "shrunk (to a quarter at most) where the boundary bias of what the camera sees (boundary_loss) calls for it.");
+        "The first kernel radius of a progressive render when settings.radius is 0: the scene's size scaled for "
+        "the photon count, shrunk (to a quarter at most) where the boundary bias of what the camera sees "
+        "(boundary_loss) calls for it. A one-pass render uses the unshrunk radius.");
     m.def(
         "boundary_loss",
         [](const ps::Scene& scene, const ps::Camera& camera, float radius) {

@@ -31,6 +31,8 @@ try:
         RenderSettings,
         Scene,
         RELMSE_EPSILON,
+        automatic_radius,
+        boundary_loss,
         psnr,
         relmse,
         default_memory_budget,

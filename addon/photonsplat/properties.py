@@ -41,8 +41,9 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
     radius: FloatProperty(
         name="Radius",
         description="Splatting radius of each photon, in world units. "
-                    "0 lets the renderer choose it: from the size of the scene and the photon count, made smaller where "
-                    "what the camera sees has details thinner than that (columns, ledges), which a wide kernel darkens",
+                    "0 lets the renderer choose it: from the size of the scene and the photon count; a progressive render "
+                    "starts smaller where what the camera sees has details thinner than that (columns, ledges), "
+                    "which a wide kernel darkens",
         default=0.0, min=0.0, soft_max=1.0, precision=4, unit='LENGTH',
     )
     method: EnumProperty(

@@ -66,8 +66,8 @@ struct PassParams {
 };
 uint64_t pass_seed(uint64_t seed, uint32_t pass);  // = seed for pass 0
 
-// The radius of pass 0: settings.radius, or when that is 0 automatic_radius (kernel_radius.h), which depends on
-// what the camera sees.
+// The radius of pass 0: settings.radius, or when that is 0 default_radius for a one-pass render and
+// automatic_radius (kernel_radius.h, which depends on what the camera sees) for a progressive one.
 float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
 // One pass of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.
