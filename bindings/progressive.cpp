@@ -69,7 +69,8 @@ void bind_progressive(py::module_& m) {
                                "Radius of the last pass done (before any pass: of the first).")
         .def_property_readonly("next_radius", &ps::ProgressiveRender::next_radius)
         .def_property_readonly("elapsed", &ps::ProgressiveRender::elapsed,
-                               "Seconds spent in completed passes (time between step() calls is not counted).")
+                               "Seconds spent choosing the first radius and in completed passes (time between step() calls is not "
+                               "counted).")
         .def_property_readonly("finished", &ps::ProgressiveRender::finished,
                                "settings.passes are done, or the next pass would end past settings.time_limit.");
 }

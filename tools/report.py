@@ -15,7 +15,8 @@ Two modes, both run by tools/run_report.sh (the one documented command):
     2. the paper's tables (HPG 2016 talk): methods cluster_cone (the paper's cluster-trivial), directional and
        tiled at 10k / 50k / 200k / 1M photons with the engine's automatic radius for each count; one-shot renders;
     3. progressive splatting of every method (brute excepted) for a time budget, the mean measured after every
-       pass against its elapsed render time (Progressive.elapsed: the passes' own time);
+       pass against its elapsed render time (Progressive.elapsed: the passes' own time and the choice of the first
+       radius);
     4. caustic scenes only: Cycles through the same Blender (CPU, BOX filter, no denoising, no adaptive sampling,
        fixed seed) at 1, 2, 4, ... samples per pixel, until it reaches the quality that progressive splatting
        reached in 30 s or a render exceeds --cycles-max-seconds; the time is the wall time of

@@ -46,7 +46,10 @@ ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, c
     validate(settings_);
     check_frame_memory(scene_, camera_, settings_, kSumBytesPerPixel);
     pixels_ = static_cast<size_t>(camera_.width()) * camera_.height();
+    // Choosing the automatic radius traces rays (kernel_radius.h): it is part of the render's time.
+    const auto started = std::chrono::steady_clock::now();
     first_radius_ = first_radius(scene_, camera_, settings_);
+    elapsed_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     last_radius_ = first_radius_;
     radius_sq_ = static_cast<double>(first_radius_) * first_radius_;
 }

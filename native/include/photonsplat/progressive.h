@@ -47,7 +47,7 @@ public:
     uint32_t passes_done() const;
     float radius() const;       // the radius of the last pass done (before any: of the first pass)
     float next_radius() const;  // the radius the next pass will use
-    double elapsed() const;     // seconds spent in completed passes (time between passes is not counted)
+    double elapsed() const;     // seconds spent choosing the first radius and in completed passes (not between)
 
     // The mean of the passes done (rgba and components), with their stats summed (seconds, counters) and the
     // progressive values: "passes", "radius" (first pass), "final_radius", "alpha", "time_limit", "elapsed",
