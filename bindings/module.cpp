@@ -37,7 +37,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
                                  float plane_distance, const std::string& kernel, int directional_level,
                                  int64_t passes, double time_limit, float alpha, bool guide_photons,
                                  bool caustics_pass, bool transparent,
-                                 uint64_t memory_budget, float aimed_photons) {
+                                 uint64_t memory_budget, float aimed_photons, bool boundary_correction) {
     ps::RenderSettings s;
     s.photons = photons;
     s.radius = radius;
@@ -58,6 +58,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.caustics_pass = caustics_pass;
     s.transparent = transparent;
     s.aimed_photons = aimed_photons;
+    s.boundary_correction = boundary_correction;
     ps::validate(s);
     return s;
 }
@@ -189,7 +190,8 @@ PYBIND11_MODULE(_core, m) {
              "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
              "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
              "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
-             "transparent"_a = false, "memory_budget"_a = 0, "aimed_photons"_a = ps::RenderSettings().aimed_photons)
+             "transparent"_a = false, "memory_budget"_a = 0, "aimed_photons"_a = ps::RenderSettings().aimed_photons,
+             "boundary_correction"_a = true)
         .def_readwrite("photons", &ps::RenderSettings::photons)
         .def_readwrite("radius", &ps::RenderSettings::radius)
         .def_property(
@@ -221,6 +223,9 @@ PYBIND11_MODULE(_core, m) {
                        "Extra photons per pass aimed at mirror and glass objects (point, spot and area lights), as a "
                        "fraction of photons; they add caustic photons only, weighted so the image stays unbiased. "
                        "0 = off.")
+        .def_readwrite("boundary_correction", &ps::RenderSettings::boundary_correction,
+                       "Divide each view sample's splatted light by the part of its kernel disc that lies on a "
+                       "like-facing surface: corners, edges and thin parts lose no light to the kernel (default True)")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -233,6 +238,7 @@ PYBIND11_MODULE(_core, m) {
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
               << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
               << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ", aimed_photons=" << s.aimed_photons
+              << ", boundary_correction=" << (s.boundary_correction ? "True" : "False")
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
               << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
             return o.str();
@@ -257,9 +263,10 @@ PYBIND11_MODULE(_core, m) {
             return ps::automatic_radius(scene, camera, photons);
         },
         "scene"_a, "camera"_a, "photons"_a,
-        "The first kernel radius of a progressive render when settings.radius is 0: the scene's size scaled for "
-        "the photon count, shrunk (to a quarter at most) where the boundary bias of what the camera sees "
-        "(boundary_loss) calls for it. A one-pass render uses the unshrunk radius.");
+        "The first kernel radius of a progressive render when settings.radius is 0 and boundary_correction is "
+        "off: the scene's size scaled for the photon count, shrunk (to a quarter at most) where the boundary bias "
+        "of what the camera sees (boundary_loss) calls for it. One-pass renders, and progressive ones with the "
+        "boundary correction (the default), use the unshrunk radius.");
     m.def(
         "boundary_loss",
         [](const ps::Scene& scene, const ps::Camera& camera, float radius) {

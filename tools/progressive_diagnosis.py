@@ -53,6 +53,8 @@ def main(argv):
     parser.add_argument("--passes", type=int, default=8)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--method", default="cluster_cone")
+    parser.add_argument("--no-boundary-correction", action="store_true",
+                        help="the paper's plain estimate (then the automatic radius weighs the boundary bias)")
     parser.add_argument("--split", type=int, default=0, help="save the components after this many passes")
     parser.add_argument("--save", default="build/diagnosis.npz")
     args = parser.parse_args(argv)
@@ -68,6 +70,7 @@ def main(argv):
     s = frame.settings
     s.method, s.photons, s.radius, s.passes, s.time_limit = args.method, args.photons, args.radius, args.passes, 0.0
     s.caustics_pass = args.split > 0
+    s.boundary_correction = not args.no_boundary_correction
     if args.aimed_photons is not None:
         s.aimed_photons = args.aimed_photons
     progressive = core.Progressive(frame.scene, frame.camera, s)

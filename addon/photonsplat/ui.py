@@ -71,6 +71,7 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         col.prop(settings, "radius")
         col.prop(settings, "method")
         col.prop(settings, "kernel")
+        col.prop(settings, "boundary_correction")
         if settings.method == "directional":
             col.prop(settings, "directional_level")
         col = layout.column()

@@ -45,6 +45,7 @@ def refine_settings(core, scene):
     render = dict(photons=props.viewport_photons, radius=props.radius, method=props.method,
                   max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
                   direct_samples=props.direct_samples, kernel=props.kernel,
+                  boundary_correction=props.boundary_correction,
                   directional_level=props.directional_level, transparent=scene.render.film_transparent)
     core.RenderSettings(**render)       # validate now: a bad value is reported, not raised in the thread
     return refine.RefineSettings(render=render, preview_photons=props.viewport_preview_photons,

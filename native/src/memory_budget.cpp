@@ -104,6 +104,8 @@ double predict_view_sample_scratch_bytes(int width, int height) {
 
 double predict_per_sample_light_bytes(size_t samples) { return double(samples) * double(sizeof(glm::vec3)); }
 
+double predict_kernel_coverage_bytes(size_t samples) { return double(samples) * double(sizeof(float)); }
+
 double predict_image_bytes(int width, int height, bool caustics_pass) {
     // RGBA, emission, direct, indirect, normal, depth (+ caustics)
     const double floats = 4 + 3 * 3 + 3 + 1 + (caustics_pass ? 3 : 0);
@@ -237,6 +239,8 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     if (settings.method == SplatMethod::directional)
         budget.reserve("leaf_summaries", predict_leaf_summary_bytes(samples), "resolution");
     budget.reserve("indirect_light", predict_per_sample_light_bytes(samples), "resolution");
+    if (settings.boundary_correction)
+        budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples), "resolution");
     if (settings.caustics_pass) {
         // The caustic photons copied out of the map, and their own splat's light.
         budget.reserve("caustic_photons", photon_map, "photons");
@@ -259,6 +263,7 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
     if (settings.method == SplatMethod::cluster_cone) grow("cones", predict_cone_bytes);
     if (settings.method == SplatMethod::directional) grow("leaf_summaries", predict_leaf_summary_bytes);
     grow("indirect_light", predict_per_sample_light_bytes);
+    if (settings.boundary_correction) grow("kernel_coverage", predict_kernel_coverage_bytes);
     if (settings.caustics_pass) grow("caustic_light", predict_per_sample_light_bytes);
 }
 

@@ -95,6 +95,7 @@ def render_settings(core, props, **overrides):
     fields = dict(photons=props.photons, radius=props.radius, method=props.method,
                   max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
                   direct_samples=props.direct_samples, kernel=props.kernel,
+                  boundary_correction=props.boundary_correction,
                   directional_level=props.directional_level, passes=props.passes,
                   time_limit=props.time_limit, memory_budget=int(props.memory_budget * 2**30))
     fields.update(overrides)

@@ -24,6 +24,9 @@ struct RenderSettings {
     float normal_tolerance = 60.0f;   // τ in degrees: photons on surfaces turned further away are ignored
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
+    // Divide each view sample's splatted light by the part of its kernel disc that lies on a like-facing surface
+    // (kernel_coverage.h): removes the darkening of corners, edges and thin parts (boundary bias).
+    bool boundary_correction = true;
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
     uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
     bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)
@@ -41,7 +44,6 @@ struct RenderSettings {
 };
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field
-
 
 struct RenderResult {
     int width = 0, height = 0;
@@ -66,8 +68,8 @@ struct PassParams {
 };
 uint64_t pass_seed(uint64_t seed, uint32_t pass);  // = seed for pass 0
 
-// The radius of pass 0: settings.radius, or when that is 0 default_radius for a one-pass render and
-// automatic_radius (kernel_radius.h, which depends on what the camera sees) for a progressive one.
+// The radius of pass 0: settings.radius, or when that is 0 default_radius, except for a progressive render
+// without boundary_correction: automatic_radius (kernel_radius.h, which depends on what the camera sees).
 float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
 // One pass of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.

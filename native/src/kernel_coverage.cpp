@@ -1,0 +1,106 @@
+#include "photonsplat/kernel_coverage.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "photonsplat/materials.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/rng.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
+#include "photonsplat/view_samples.h"
+
+namespace ps {
+
+namespace {
+
+constexpr int kMaxSpecularCrossings = 4;  // mirrors and glass a probe passes through before it gives up
+
+// What a probe finds of the surface photons land on: along the segment from `start` in direction `down` (length
+// `length`), the first non-specular surface, if it faces within the splat's tolerance of `normal`. Specular
+// surfaces are passed through: the photons they send on land behind them. Returns the cosine between that
+// surface's normal and `normal` (0 when the probe finds no such surface) and the distance along the segment.
+struct ProbeHit {
+    float cosine = 0.0f;
+    float t = 0.0f;
+};
+
+ProbeHit probe(const Scene& scene, const glm::vec3& start, const glm::vec3& down, float length,
+               const glm::vec3& normal, float cos_tolerance) {
+    const RayTracer& tracer = scene.ray_tracer();
+    const Ray ray{start, down};
+    float t_min = 0.0f;
+    for (int crossing = 0; crossing <= kMaxSpecularCrossings; ++crossing) {
+        Hit hit;
+        if (!tracer.intersect(ray, t_min, length, hit, kIndirectRays)) return {};
+        const SurfacePoint s = surface_at(scene, ray, hit);
+        if (!s.material->is_specular()) {
+            const float cosine = glm::dot(s.geometric_normal, normal);
+            return cosine > cos_tolerance ? ProbeHit{cosine, hit.t} : ProbeHit{};
+        }
+        t_min = std::nextafter(hit.t, length) + 1e-6f * length;  // just past the specular surface
+    }
+    return {};
+}
+
+}  // namespace
+
+std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& samples, const SplatParams& params,
+                                   uint64_t seed, const RenderControl& control, Stats& stats) {
+    std::vector<float> coverage(samples.samples.size(), 1.0f);
+    const float r = params.radius;
+    if (samples.samples.empty() || !(r > 0.0f)) return coverage;
+    // Coverage is the kernel-weighted area of photon-receiving surface inside the kernel's ball over π r², the
+    // area the estimate divides by (a plane through the centre: 1). Probe k lies in the k-th of kCoverageProbes
+    // equal-area rings of the tangent disc, at a random radius within it (a fixed radius would misjudge a surface
+    // that ends inside the ring), so it stands for 1/kCoverageProbes of the disc's area; the surface it finds
+    // stands for that area over the cosine of its tilt (a tilted or curved surface holds more area above the same
+    // patch of disc: a sphere cut by a ball centred on it holds exactly π r²), weighted by the kernel at its
+    // distance from the centre. The sum is divided by what a plane through the centre would give at the same
+    // probes (kCoverageProbes for the uniform kernel), so that a plane's coverage is exactly 1.
+    std::atomic<bool> cancelled{false};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.samples.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+        if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
+            cancelled = true;
+            return;
+        }
+        constexpr float kGoldenAngle = 2.39996323f;
+        for (size_t i = range.begin(); i < range.end(); ++i) {
+            const ViewSample& s = samples.samples[i];
+            const glm::vec3 x = s.position + samples.origin;
+            glm::vec3 tangent, bitangent;
+            orthonormal_basis(s.normal, tangent, bitangent);
+            Rng rng(seed, RngDomain::kernel_coverage, i);
+            const float rotation = 6.2831853f * rng.uniform();
+            float area = 0.0f, plane = 0.0f;
+            for (int k = 0; k < kCoverageProbes; ++k) {
+                const float rho = r * std::sqrt((k + rng.uniform()) / kCoverageProbes);
+                const float angle = rotation + k * kGoldenAngle;
+                const glm::vec3 q = x + rho * (std::cos(angle) * tangent + std::sin(angle) * bitangent);
+                // The kernel is a ball: at distance ρ from its centre it reaches h above and below the plane.
+                const float h = std::sqrt(std::max(r * r - rho * rho, 0.0f));
+                const bool uniform = params.kernel == Kernel::uniform;
+                plane += uniform ? 1.0f : 2.0f * (1.0f - rho * rho / (r * r));
+                const ProbeHit hit = probe(scene, q + h * s.normal, -s.normal, 2.0f * h, s.normal,
+                                           params.cos_normal_tolerance);
+                if (hit.cosine == 0.0f) continue;
+                const float height = h - hit.t;  // of the surface found, above the tangent plane
+                const float weight = uniform ? 1.0f : std::max(2.0f * (1.0f - (rho * rho + height * height) / (r * r)), 0.0f);
+                area += weight / hit.cosine;
+            }
+            coverage[i] = plane > 0.0f ? std::max(area / plane, kMinCoverage) : 1.0f;
+        }
+    });
+    control.check();
+    stats.counters["coverage_probes"] += static_cast<double>(samples.samples.size()) * kCoverageProbes;
+    return coverage;
+}
+
+}  // namespace ps

@@ -1,0 +1,130 @@
+// The boundary correction's coverage (kernel_coverage.h): 1 inside a plane for both kernels, the analytic
+// fraction of a disc that stays on a plate near its edge, π r² of a sphere (not its smaller shadow on the tangent
+// plane), no loss under glass, and the same figures whatever the threads.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "photonsplat/kernel_coverage.h"
+#include "photonsplat/render_control.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
+#include "photonsplat/view_samples.h"
+#include "test_scenes.h"
+
+namespace {
+
+using namespace ps;
+
+uint32_t diffuse(Scene& scene) { return scene.add_material(Material{}); }
+
+// Straight down at the origin, 64 × 64 pixels.
+Camera top_camera(float height) { return test::look_at({0, 0, height}, {0, 0, 0}, 64, 64, 40.0f, {0, 1, 0}); }
+
+ViewSamples samples_of(const Scene& scene, const Camera& camera) {
+    RenderControl control;
+    Stats stats;
+    return generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+}
+
+std::vector<float> coverage_of(const Scene& scene, const ViewSamples& samples, float radius,
+                               Kernel kernel = Kernel::uniform, uint64_t seed = 1) {
+    SplatParams params;
+    params.radius = radius;
+    params.kernel = kernel;
+    RenderControl control;
+    Stats stats;
+    return kernel_coverage(scene, samples, params, seed, control, stats);
+}
+
+// The fraction of a disc of radius r centred a distance d from a straight edge that lies beyond it.
+double beyond_edge(double d, double r) {
+    if (d >= r) return 0.0;
+    const double c = d / r;
+    return (std::acos(c) - c * std::sqrt(1.0 - c * c)) / M_PI;
+}
+
+TEST(KernelCoverage, InsideAPlaneEveryKernelIsFullyCovered) {
+    Scene scene;
+    test::add_quad(scene, "floor", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, diffuse(scene));
+    const ViewSamples samples = samples_of(scene, top_camera(2.0f));
+    ASSERT_EQ(samples.samples.size(), 64u * 64u);
+    for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
+        for (float c : coverage_of(scene, samples, 0.5f, kernel)) ASSERT_NEAR(c, 1.0f, 1e-5f) << to_string(kernel);
+}
+
+TEST(KernelCoverage, NearAnEdgeItIsTheDiscLeftOnThePlate) {
+    // A plate ending at x = 0.2 under a camera looking straight down: a sample at distance d from the edge keeps
+    // 1 − beyond_edge(d, r) of its disc. Per sample the 8 probes estimate it; over the image the mean must match.
+    Scene scene;
+    test::add_quad(scene, "plate", {-50, -50, 0}, {0.2f, -50, 0}, {0.2f, 50, 0}, {-50, 50, 0}, diffuse(scene));
+    const ViewSamples samples = samples_of(scene, top_camera(2.0f));
+    const float r = 0.3f;
+    const std::vector<float> coverage = coverage_of(scene, samples, r);
+    double measured = 0.0, expected = 0.0;
+    int near_edge = 0;
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        const double x = samples.samples[i].position.x + samples.origin.x;
+        measured += coverage[i];
+        expected += std::max(1.0 - beyond_edge(0.2 - x, r), double(kMinCoverage));
+        near_edge += (0.2 - x < r) ? 1 : 0;
+    }
+    ASSERT_GT(near_edge, 500);  // a good part of the image is within r of the edge
+    EXPECT_NEAR(measured / samples.samples.size(), expected / samples.samples.size(), 0.01);
+    EXPECT_LT(measured / samples.samples.size(), 0.93);  // and the edge matters to that mean
+}
+
+TEST(KernelCoverage, ASphereHoldsTheAreaOfAPlane) {
+    // A ball of radius r centred on a sphere of radius R >= r/2 holds exactly π r² of it (Archimedes), so the
+    // uncorrected estimate on a sphere is not biased by its curvature: the coverage there must be 1, though the
+    // sphere's shadow on the tangent plane (what the probes hit) is a smaller disc.
+    Scene scene;
+    test::add_sphere(scene, "ball", {0, 0, 0}, 1.0f, diffuse(scene), 96, 192);
+    const ViewSamples samples = samples_of(scene, test::look_at({0, 0, 6}, {0, 0, 0}, 64, 64, 20.0f, {0, 1, 0}));
+    ASSERT_GT(samples.samples.size(), 2000u);
+    const float r = 0.4f;  // the cap inside the ball spans 23.1°: within the splat's 60° normal tolerance
+    const std::vector<float> coverage = coverage_of(scene, samples, r);
+    double sum = 0.0;
+    for (float c : coverage) sum += c;
+    EXPECT_NEAR(sum / coverage.size(), 1.0, 0.01);
+    // The shadow's share of the disc, which a probe count without the tilt would give: (R sin 23.1° / r)² = 0.96.
+    EXPECT_GT(sum / coverage.size(), 0.98);
+}
+
+TEST(KernelCoverage, GlassOverThePlaneIsSeenThrough) {
+    // A glass pane 5 cm above the floor, inside every ball: photons pass it and land on the floor, so the floor
+    // stays fully covered (a probe that stopped at the pane would find no surface to land on).
+    Scene scene;
+    const uint32_t white = diffuse(scene);
+    Material glass;
+    glass.kind = MaterialKind::glass;
+    const uint32_t pane = scene.add_material(glass);
+    test::add_quad(scene, "floor", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, white);
+    test::add_quad(scene, "pane", {-50, -50, 0.05f}, {50, -50, 0.05f}, {50, 50, 0.05f}, {-50, 50, 0.05f}, pane);
+    const ViewSamples samples = samples_of(scene, top_camera(2.0f));  // refracted through the pane to the floor
+    ASSERT_EQ(samples.samples.size(), 64u * 64u);
+    ASSERT_TRUE(samples.samples[0].flags & kViaSpecular);
+    for (float c : coverage_of(scene, samples, 0.3f)) ASSERT_NEAR(c, 1.0f, 1e-5f);
+}
+
+TEST(KernelCoverage, TheSameWhateverTheThreadsAndNewPerSeed) {
+    Scene scene;
+    test::build_cornell_box(scene, true);
+    const ViewSamples samples = samples_of(scene, test::cornell_camera(48, 48));
+    const std::vector<float> many = coverage_of(scene, samples, 0.2f);
+    std::vector<float> one;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = coverage_of(scene, samples, 0.2f);
+    }
+    EXPECT_EQ(many, one);
+    EXPECT_NE(many, coverage_of(scene, samples, 0.2f, Kernel::uniform, 2));  // passes probe other directions
+    for (float c : many) {
+        ASSERT_GE(c, kMinCoverage);
+        ASSERT_LE(c, 2.0f);
+    }
+}
+
+}  // namespace
