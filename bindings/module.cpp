@@ -225,7 +225,8 @@ PYBIND11_MODULE(_core, m) {
                        "0 = off.")
         .def_readwrite("boundary_correction", &ps::RenderSettings::boundary_correction,
                        "Divide each view sample's splatted light by the part of its kernel disc that lies on a "
-                       "like-facing surface: corners, edges and thin parts lose no light to the kernel (default True)")
+                       "like-facing surface: corners, edges and thin parts lose no light to the kernel (default True; glossy "
+                       "samples and directional's approximate passes are left as they are)")
         .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
                        "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
         .def_readwrite("transparent", &ps::RenderSettings::transparent,
@@ -263,10 +264,10 @@ PYBIND11_MODULE(_core, m) {
             return ps::automatic_radius(scene, camera, photons);
         },
         "scene"_a, "camera"_a, "photons"_a,
-        "The first kernel radius of a progressive render when settings.radius is 0 and boundary_correction is "
-        "off: the scene's size scaled for the photon count, shrunk (to a quarter at most) where the boundary bias "
-        "of what the camera sees (boundary_loss) calls for it. One-pass renders, and progressive ones with the "
-        "boundary correction (the default), use the unshrunk radius.");
+        "The first kernel radius of a progressive render when settings.radius is 0 and the boundary correction "
+        "does not cover it (off, or method 'directional'): the scene's size scaled for the photon count, shrunk "
+        "(to a quarter at most) where the boundary bias of what the camera sees (boundary_loss) calls for it. "
+        "One-pass renders, and progressive ones with the correction (the default), use the unshrunk radius.");
     m.def(
         "boundary_loss",
         [](const ps::Scene& scene, const ps::Camera& camera, float radius) {

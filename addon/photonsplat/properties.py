@@ -41,9 +41,9 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
     radius: FloatProperty(
         name="Radius",
         description="Splatting radius of each photon, in world units. "
-                    "0 lets the renderer choose it from the size of the scene and the photon count (with Boundary "
-                    "Correction off, a progressive render starts smaller where what the camera sees has details "
-                    "thinner than that, which a wide kernel darkens)",
+                    "0 lets the renderer choose it from the size of the scene and the photon count (without Boundary "
+                    "Correction, or with the Directional method, a progressive render starts smaller where what the "
+                    "camera sees has details thinner than that, which a wide kernel darkens)",
         default=0.0, min=0.0, soft_max=1.0, precision=4, unit='LENGTH',
     )
     method: EnumProperty(
@@ -75,7 +75,8 @@ class PhotonSplatSceneSettings(bpy.types.PropertyGroup):
         name="Boundary Correction",
         description="Divide each pixel's bounced light by the part of its kernel that lies on a surface like its "
                     "own, so corners, edges, columns and ledges are not darkened by a kernel that reaches past "
-                    "them. Off gives the paper's plain estimate",
+                    "them (glossy surfaces and Directional's approximate passes excepted). Off gives the paper's plain "
+                    "estimate",
         default=True,
     )
     directional_level: IntProperty(

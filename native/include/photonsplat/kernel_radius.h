@@ -31,9 +31,9 @@ constexpr int kBoundaryLossGrid = 32;
 float boundary_loss(const Scene& scene, const Camera& camera, float radius);
 
 // default_radius, or a smaller one (a quarter at most) where the boundary bias of what the camera sees calls
-// for it: the first radius of progressive renders without the boundary correction (kernel_coverage.h), whose
-// passes average away the extra noise (a one-pass render, or one with the correction, keeps default_radius:
-// render.h). Deterministic; `camera` may be in world or render space.
+// for it: the first radius of progressive renders that the boundary correction (kernel_coverage.h) does not
+// cover, whose passes average away the extra noise (a one-pass render, or one with the correction, keeps
+// default_radius: render.h). Deterministic; `camera` may be in world or render space.
 float automatic_radius(const Scene& scene, const Camera& camera, uint64_t photons);
 
 }  // namespace ps

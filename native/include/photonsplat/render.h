@@ -25,7 +25,8 @@ struct RenderSettings {
     float plane_distance = 0.0f;      // κ of the plane-distance test (stacked surfaces); 0 = off
     Kernel kernel = Kernel::uniform;  // density-estimation kernel
     // Divide each view sample's splatted light by the part of its kernel disc that lies on a like-facing surface
-    // (kernel_coverage.h): removes the darkening of corners, edges and thin parts (boundary bias).
+    // (kernel_coverage.h): removes the darkening of corners, edges and thin parts (boundary bias). Every method
+    // but directional, whose blocks are not kernel discs (it is corrected where it falls back to exact).
     bool boundary_correction = true;
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
     uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
@@ -69,7 +70,8 @@ struct PassParams {
 uint64_t pass_seed(uint64_t seed, uint32_t pass);  // = seed for pass 0
 
 // The radius of pass 0: settings.radius, or when that is 0 default_radius, except for a progressive render
-// without boundary_correction: automatic_radius (kernel_radius.h, which depends on what the camera sees).
+// that the boundary correction does not cover (switched off, or directional, whose approximate passes it
+// skips): automatic_radius (kernel_radius.h, which depends on what the camera sees).
 float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
 // One pass of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.
