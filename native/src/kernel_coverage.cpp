@@ -50,10 +50,6 @@ ProbeHit probe(const Scene& scene, const glm::vec3& start, const glm::vec3& down
     return {};
 }
 
-}  // namespace
-
-namespace {
-
 // Probe k lies in the k-th of kCoverageProbes equal-area rings of the tangent disc, at a random radius within it
 // (a fixed radius would misjudge a surface that ends inside the ring), so it stands for 1/kCoverageProbes of the
 // disc's area. One pattern (radii and angles in each sample's tangent frame) serves every sample of a call: the
@@ -105,8 +101,8 @@ float sample_coverage(const Scene& scene, const ViewSample& s, const glm::vec3& 
     return pattern.plane > 0.0f ? std::max(area / pattern.plane, kMinCoverage) : 1.0f;
 }
 
-// Whether sample b lies on the same flat surface as a, within a quarter of the kernel's radius: near enough for a's coverage to
-// stand for b's.
+// Whether sample b lies on the same flat surface as a, within a quarter of the kernel's radius: near enough for
+// a's coverage to stand for b's.
 bool alike(const ViewSample& a, const ViewSample& b, float radius) {
     const glm::vec3 d = b.position - a.position;
     return glm::dot(a.normal, b.normal) > 0.9995f && std::fabs(glm::dot(a.normal, d)) < 1e-3f * radius &&
@@ -142,6 +138,8 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // those lie on the same flat surface, which halves the probe rays at no measurable cost in SSIM.
     const int width = samples.width;
     std::vector<uint32_t> first_sample(static_cast<size_t>(width) * samples.height, UINT32_MAX);
+    stats.bytes["kernel_coverage"] = static_cast<double>(coverage.capacity() * sizeof(float) +
+                                                         first_sample.capacity() * sizeof(uint32_t));
     for (size_t i = count; i-- > 0;) first_sample[samples.samples[i].pixel] = static_cast<uint32_t>(i);
     const auto on_board = [&](size_t i) {
         const ViewSample& s = samples.samples[i];

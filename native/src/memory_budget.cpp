@@ -239,8 +239,9 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     if (settings.method == SplatMethod::directional)
         budget.reserve("leaf_summaries", predict_leaf_summary_bytes(samples), "resolution");
     budget.reserve("indirect_light", predict_per_sample_light_bytes(samples), "resolution");
-    if (settings.boundary_correction)
-        budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples), "resolution");
+    if (settings.boundary_correction)  // with the index of each pixel's first sample (samples = pixels here)
+        budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples) + double(samples) * sizeof(uint32_t),
+                       "resolution");
     if (settings.caustics_pass) {
         // The caustic photons copied out of the map, and their own splat's light.
         budget.reserve("caustic_photons", photon_map, "photons");

@@ -229,7 +229,6 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
         if (settings.boundary_correction && kernel_estimate && !photons.photons.empty()) {
             StageTimer t(stats, "kernel_coverage");
             const std::vector<float> coverage = kernel_coverage(scene, samples, params, seed, control, stats);
-            stats.bytes["kernel_coverage"] = static_cast<double>(coverage.capacity() * sizeof(float));
             for (size_t i = 0; i < coverage.size(); ++i) {
                 indirect[i] /= coverage[i];
                 if (settings.caustics_pass) caustic[i] /= coverage[i];

@@ -70,7 +70,8 @@ double predict_view_sample_bytes(int width, int height);
 double predict_view_sample_scratch_bytes(int width, int height);
 // Direct light and splatted indirect light per view sample, and the frame's RGBA + three component buffers.
 double predict_per_sample_light_bytes(size_t samples);
-// The boundary correction's coverage of each view sample (kernel_coverage.h).
+// The boundary correction's coverage of each view sample (kernel_coverage.h); reserve_frame adds its index of
+// each pixel's first sample.
 double predict_kernel_coverage_bytes(size_t samples);
 double predict_image_bytes(int width, int height, bool caustics_pass);
 // Embree's geometry buffers (the BVH itself lives in Embree and is not counted).
