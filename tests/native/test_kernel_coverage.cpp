@@ -22,9 +22,6 @@ using namespace ps;
 
 uint32_t diffuse(Scene& scene) { return scene.add_material(Material{}); }
 
-// Straight down at the origin, 64 × 64 pixels.
-Camera top_camera(float height) { return test::look_at({0, 0, height}, {0, 0, 0}, 64, 64, 40.0f, {0, 1, 0}); }
-
 ViewSamples samples_of(const Scene& scene, const Camera& camera) {
     RenderControl control;
     Stats stats;
@@ -41,17 +38,10 @@ std::vector<float> coverage_of(const Scene& scene, const ViewSamples& samples, f
     return kernel_coverage(scene, samples, params, seed, control, stats);
 }
 
-// The fraction of a disc of radius r centred a distance d from a straight edge that lies beyond it.
-double beyond_edge(double d, double r) {
-    if (d >= r) return 0.0;
-    const double c = d / r;
-    return (std::acos(c) - c * std::sqrt(1.0 - c * c)) / M_PI;
-}
-
 TEST(KernelCoverage, InsideAPlaneEveryKernelIsFullyCovered) {
     Scene scene;
     test::add_quad(scene, "floor", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, diffuse(scene));
-    const ViewSamples samples = samples_of(scene, top_camera(2.0f));
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));
     ASSERT_EQ(samples.samples.size(), 64u * 64u);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
         for (float c : coverage_of(scene, samples, 0.5f, kernel)) ASSERT_NEAR(c, 1.0f, 1e-5f) << to_string(kernel);
@@ -59,10 +49,11 @@ TEST(KernelCoverage, InsideAPlaneEveryKernelIsFullyCovered) {
 
 TEST(KernelCoverage, NearAnEdgeItIsTheDiscLeftOnThePlate) {
     // A plate ending at x = 0.2 under a camera looking straight down: a sample at distance d from the edge keeps
-    // 1 − beyond_edge(d, r) of its disc. Per sample the 8 probes estimate it; over the image the mean must match.
+    // 1 − disc_beyond_edge(d, r) of its disc. Per sample the 8 probes estimate it; over the image the mean must
+    // match.
     Scene scene;
     test::add_quad(scene, "plate", {-50, -50, 0}, {0.2f, -50, 0}, {0.2f, 50, 0}, {-50, 50, 0}, diffuse(scene));
-    const ViewSamples samples = samples_of(scene, top_camera(2.0f));
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));
     const float r = 0.3f;
     constexpr int kSeeds = 32;
     double measured = 0.0, expected = 0.0;
@@ -73,7 +64,7 @@ TEST(KernelCoverage, NearAnEdgeItIsTheDiscLeftOnThePlate) {
     }
     for (const ViewSample& s : samples.samples) {
         const double x = s.position.x + samples.origin.x;
-        expected += std::max(1.0 - beyond_edge(0.2 - x, r), double(kMinCoverage));
+        expected += std::max(1.0 - test::disc_beyond_edge(0.2 - x, r), double(kMinCoverage));
         near_edge += (0.2 - x < r) ? 1 : 0;
     }
     measured /= double(kSeeds) * samples.samples.size();
@@ -112,7 +103,7 @@ TEST(KernelCoverage, GlassOverThePlaneIsSeenThrough) {
     const uint32_t pane = scene.add_material(glass);
     test::add_quad(scene, "floor", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, white);
     test::add_quad(scene, "pane", {-50, -50, 0.05f}, {50, -50, 0.05f}, {50, 50, 0.05f}, {-50, 50, 0.05f}, pane);
-    const ViewSamples samples = samples_of(scene, top_camera(2.0f));  // refracted through the pane to the floor
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));  // refracted through the pane to the floor
     ASSERT_EQ(samples.samples.size(), 64u * 64u);
     ASSERT_TRUE(samples.samples[0].flags & kViaSpecular);
     for (float c : coverage_of(scene, samples, 0.3f)) ASSERT_NEAR(c, 1.0f, 1e-5f);
@@ -126,7 +117,7 @@ TEST(KernelCoverage, GlossySamplesKeepTheirEstimate) {
     metal.roughness = 0.3f;
     const uint32_t m = scene.add_material(metal);
     test::add_quad(scene, "plate", {-50, -50, 0}, {0.2f, -50, 0}, {0.2f, 50, 0}, {-50, 50, 0}, m);
-    const ViewSamples samples = samples_of(scene, top_camera(2.0f));
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));
     ASSERT_TRUE(samples.samples[0].flags & kGlossy);
     for (float c : coverage_of(scene, samples, 0.3f)) ASSERT_EQ(c, 1.0f);
 }

@@ -20,23 +20,13 @@ void add_plate(Scene& scene, float half, uint32_t material) {
     test::add_quad(scene, "plate", {-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}, material);
 }
 
-// Straight down at the origin: a plane perpendicular to the view maps the image grid to an even grid on it.
-Camera top_camera(float height) { return test::look_at({0, 0, height}, {0, 0, 0}, 64, 64, 40.0f, {0, 1, 0}); }
-
-// The fraction of a disc of radius r centred a distance d from a straight edge that lies beyond it.
-double beyond_edge(double d, double r) {
-    if (d >= r) return 0.0;
-    const double c = d / r;
-    return (std::acos(c) - c * std::sqrt(1.0 - c * c)) / M_PI;
-}
-
 TEST(KernelRadius, AStripLosesWhatItsEdgesPredict) {
     // A strip 1 m wide and 100 m long under a camera looking straight down: a disc of radius r <= 0.5 m can
-    // reach past one edge at most, so the loss at a point is beyond_edge of its distance to the nearer edge.
+    // reach past one edge at most, so the loss at a point is disc_beyond_edge of its distance to the nearer edge.
     // The expectation is averaged over the points boundary_loss uses (the documented grid of camera rays).
     Scene scene;
     test::add_quad(scene, "strip", {-0.5f, -50, 0}, {0.5f, -50, 0}, {0.5f, 50, 0}, {-0.5f, 50, 0}, diffuse(scene));
-    const Camera camera = top_camera(1.6f);  // the strip fills the middle 86 % of the image's width
+    const Camera camera = test::top_down_camera(1.6f);  // the strip fills the middle 86 % of the image's width
     const int grid = kBoundaryLossGrid;  // the image is 64 × 64: grid × grid points
     for (double r : {0.1, 0.2, 0.3, 0.5}) {
         double sum = 0.0;
@@ -46,7 +36,7 @@ TEST(KernelRadius, AStripLosesWhatItsEdgesPredict) {
                 const Ray ray = camera.generate_ray((i + 0.5f) * 64 / grid, (j + 0.5f) * 64 / grid);
                 const double x = ray.origin.x - ray.origin.z / ray.direction.z * ray.direction.x;
                 if (std::fabs(x) > 0.5) continue;  // background
-                sum += beyond_edge(0.5 - x, r) + beyond_edge(x + 0.5, r);
+                sum += test::disc_beyond_edge(0.5 - x, r) + test::disc_beyond_edge(x + 0.5, r);
                 ++seen;
             }
         }
@@ -59,7 +49,7 @@ TEST(KernelRadius, AStripLosesWhatItsEdgesPredict) {
 TEST(KernelRadius, AWideFloorKeepsTheDefaultRadius) {
     Scene scene;
     add_plate(scene, 50.0f, diffuse(scene));
-    const Camera camera = top_camera(2.0f);
+    const Camera camera = test::top_down_camera(2.0f);
     EXPECT_EQ(boundary_loss(scene, camera, 1.0f), 0.0f);
     EXPECT_EQ(automatic_radius(scene, camera, 12500), default_radius(scene, 12500));
 }
@@ -73,7 +63,7 @@ TEST(KernelRadius, ThinStripsShrinkTheRadius) {
         const float x = -1.0f + 0.2f * i;
         test::add_quad(scene, "strip", {x, -1, 0}, {x + 0.05f, -1, 0}, {x + 0.05f, 1, 0}, {x, 1, 0}, m);
     }
-    const Camera camera = top_camera(2.5f);
+    const Camera camera = test::top_down_camera(2.5f);
     const float r0 = default_radius(scene, 12500);
     ASSERT_GT(r0, 0.15f);
     const float wide = boundary_loss(scene, camera, r0), narrow = boundary_loss(scene, camera, 0.01f);
@@ -84,7 +74,7 @@ TEST(KernelRadius, ThinStripsShrinkTheRadius) {
 
 TEST(KernelRadius, NothingSeenOrOnlyMirrorsKeepTheDefaultRadius) {
     Scene empty;
-    const Camera camera = top_camera(2.0f);
+    const Camera camera = test::top_down_camera(2.0f);
     EXPECT_EQ(boundary_loss(empty, camera, 0.5f), 0.0f);
     EXPECT_EQ(automatic_radius(empty, camera, 1000), default_radius(empty, 1000));
 
@@ -104,7 +94,7 @@ TEST(KernelRadius, OnlyProgressiveRendersTheCorrectionDoesNotCoverStartAtTheAuto
         test::add_quad(scene, "strip", {x, -1, 0}, {x + 0.05f, -1, 0}, {x + 0.05f, 1, 0}, {x, 1, 0}, m);
     }
     scene.add_light(test::point_light("lamp", {0, 0, 2}, 100.0f));
-    const Camera camera = top_camera(2.5f);
+    const Camera camera = test::top_down_camera(2.5f);
     RenderSettings settings;
     settings.photons = 2000;
     ASSERT_LT(automatic_radius(scene, camera, 2000), default_radius(scene, 2000));

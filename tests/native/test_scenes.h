@@ -201,4 +201,15 @@ inline Camera moved_cornell_camera(glm::dvec3 offset, int width, int height) {
     return Camera(to_world, perspective(40.0f, static_cast<float>(width) / height, 0.1f, 100.0f), width, height);
 }
 
+// Straight down at the origin from `height`, 64 × 64 pixels: a plane perpendicular to the view maps the image
+// grid to an even grid on it.
+inline Camera top_down_camera(float height) { return look_at({0, 0, height}, {0, 0, 0}, 64, 64, 40.0f, {0, 1, 0}); }
+
+// The fraction of a disc of radius r centred a distance d from a straight edge that lies beyond it.
+inline double disc_beyond_edge(double d, double r) {
+    if (d >= r) return 0.0;
+    const double c = d / r;
+    return (std::acos(c) - c * std::sqrt(1.0 - c * c)) / M_PI;
+}
+
 }  // namespace ps::test
