@@ -26,7 +26,7 @@ using namespace ps_py;
 namespace {
 
 // Python ints of any sign reach the core's unsigned pass count only through here, so -1 is named, not wrapped.
-uint32_t pass_count(int64_t passes) {
+uint32_t iteration_count(int64_t passes) {
     if (passes < 0 || passes > 1'000'000)
         throw ps::InvalidInput("passes", "must be in [0, 1000000] (0 = until time_limit), got " + std::to_string(passes));
     return static_cast<uint32_t>(passes);
@@ -51,7 +51,7 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     s.kernel = ps::kernel_from_string(kernel);
     s.directional_level = directional_level;
     s.memory_budget = memory_budget;
-    s.passes = pass_count(passes);
+    s.iterations = iteration_count(passes);
     s.time_limit = time_limit;
     s.alpha = alpha;
     s.guide_photons = guide_photons;
@@ -210,8 +210,8 @@ PYBIND11_MODULE(_core, m) {
         .def_readwrite("memory_budget", &ps::RenderSettings::memory_budget,
                        "bytes the render may hold; 0 = 3/4 of this machine's (or container's) memory")
         .def_property(
-            "passes", [](const ps::RenderSettings& s) { return s.passes; },
-            [](ps::RenderSettings& s, int64_t v) { s.passes = pass_count(v); },
+            "passes", [](const ps::RenderSettings& s) { return s.iterations; },
+            [](ps::RenderSettings& s, int64_t v) { s.iterations = iteration_count(v); },
             "Progressive passes; 1 = the one-shot method, 0 = until time_limit")
         .def_readwrite("time_limit", &ps::RenderSettings::time_limit,
                        "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
@@ -237,7 +237,7 @@ PYBIND11_MODULE(_core, m) {
               << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
               << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
               << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
-              << ", passes=" << s.passes << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
+              << ", passes=" << s.iterations << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
               << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ", aimed_photons=" << s.aimed_photons
               << ", boundary_correction=" << (s.boundary_correction ? "True" : "False")
               << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
@@ -251,7 +251,7 @@ PYBIND11_MODULE(_core, m) {
           "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
           "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
           "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
-          "settings.passes != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
+          "settings.iterations != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
           "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
 
     m.def("default_memory_budget", &ps::default_memory_budget,

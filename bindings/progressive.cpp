@@ -1,6 +1,6 @@
 // Progressive rendering one pass at a time, for callers that show the image between passes (the viewport,
 // F12 in Blender): photonsplat.Progressive(scene, camera, settings), then .step() and .image() as often as wanted.
-// A whole progressive render in one call is render() with settings.passes / settings.time_limit.
+// A whole progressive render in one call is render() with settings.iterations / settings.time_limit.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -34,7 +34,7 @@ void bind_progressive(py::module_& m) {
             "step",
             [](ps::ProgressiveRender& p, const py::object& progress) {
                 run_in_background<int>(progress, [&](ps::RenderControl& control) {
-                    p.run_pass(control);
+                    p.run_iteration(control);
                     return 0;
                 });
             },
@@ -54,7 +54,7 @@ void bind_progressive(py::module_& m) {
         .def(
             "passes",
             [](const ps::ProgressiveRender& p) {
-                if (p.passes_done() == 0) throw ps::InvalidInput("passes", "no pass has been rendered yet");
+                if (p.iterations_done() == 0) throw ps::InvalidInput("passes", "no pass has been rendered yet");
                 return pass_images(p.result());
             },
             "The mean of each per-pass image, as render(passes=True) gives them ('emission', 'direct', 'indirect', "
@@ -64,7 +64,8 @@ void bind_progressive(py::module_& m) {
              "Stats summed over the passes done (seconds, counters), bytes of the last, and values: passes, radius "
              "(first pass), final_radius, alpha, time_limit, elapsed, and for directional "
              "directional_exact_passes / directional_exact_from_pass.")
-        .def_property_readonly("passes_done", &ps::ProgressiveRender::passes_done)
+        .def_property_readonly("iterations_done", &ps::ProgressiveRender::iterations_done)
+        .def_property_readonly("passes_done", &ps::ProgressiveRender::iterations_done, "Deprecated name of iterations_done.")
         .def_property_readonly("radius", &ps::ProgressiveRender::radius,
                                "Radius of the last pass done (before any pass: of the first).")
         .def_property_readonly("next_radius", &ps::ProgressiveRender::next_radius)
@@ -72,7 +73,7 @@ void bind_progressive(py::module_& m) {
                                "Seconds spent choosing the first radius and in completed passes (time between step() calls is not "
                                "counted).")
         .def_property_readonly("finished", &ps::ProgressiveRender::finished,
-                               "settings.passes are done, or the next pass would end past settings.time_limit.");
+                               "settings.iterations are done, or the next pass would end past settings.time_limit.");
 }
 
 }  // namespace ps_py

@@ -170,7 +170,7 @@ RenderSettings make_settings(FuzzedDataProvider& in) {
     s.kernel = in.ConsumeBool() ? Kernel::uniform : Kernel::epanechnikov;
     s.directional_level = in.ConsumeIntegralInRange<int>(-2, 8);
     s.memory_budget = in.ConsumeBool() ? 0 : in.ConsumeIntegralInRange<uint64_t>(0, uint64_t(64) << 20);
-    s.passes = in.ConsumeIntegralInRange<uint32_t>(0, 2);  // 0 needs a time limit; 2 runs the progressive path
+    s.iterations = in.ConsumeIntegralInRange<uint32_t>(0, 2);  // 0 needs a time limit; 2 runs the progressive path
     s.time_limit = in.ConsumeBool() ? 0.0 : 0.05;
     s.caustics_pass = in.ConsumeBool();
     s.transparent = in.ConsumeBool();

@@ -54,24 +54,24 @@ ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, c
     radius_sq_ = static_cast<double>(first_radius_) * first_radius_;
 }
 
-void ProgressiveRender::run_pass(RenderControl& control) {
+void ProgressiveRender::run_iteration(RenderControl& control) {
     RunningFlag running(running_);
     uint32_t index;
     float radius;
     double elapsed;
     {
         std::lock_guard<std::mutex> lock(mutex_);
-        index = passes_done_;
+        index = iterations_done_;
         radius = static_cast<float>(std::sqrt(radius_sq_));
         elapsed = elapsed_;
     }
     // Progress: this pass's share of the whole, by pass count or by time, whichever is further along.
     double start = 0.0, end = 1.0;
     std::string prefix = "pass " + std::to_string(index + 1);
-    if (settings_.passes > 0) {
-        start = static_cast<double>(index) / settings_.passes;
-        end = static_cast<double>(index + 1) / settings_.passes;
-        prefix += "/" + std::to_string(settings_.passes);
+    if (settings_.iterations > 0) {
+        start = static_cast<double>(index) / settings_.iterations;
+        end = static_cast<double>(index + 1) / settings_.iterations;
+        prefix += "/" + std::to_string(settings_.iterations);
     }
     if (settings_.time_limit > 0.0 && index > 0) {
         const double per_pass = elapsed / index;
@@ -83,14 +83,14 @@ void ProgressiveRender::run_pass(RenderControl& control) {
     control.set_span(std::min(start, 1.0), std::min(end, 1.0), prefix + ": ");
 
     const auto began = std::chrono::steady_clock::now();
-    PassParams pass;
+    IterationParams pass;
     pass.index = index;
     pass.radius = radius;
-    RenderResult r = render_pass(scene_, camera_, settings_, pass, control);
+    RenderResult r = render_iteration(scene_, camera_, settings_, pass, control);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
 
     std::lock_guard<std::mutex> lock(mutex_);
-    if (passes_done_ == 0) {
+    if (iterations_done_ == 0) {
         rgba_sum_.assign(pixels_ * 4, 0.0);
         emission_sum_.assign(pixels_ * 3, 0.0);
         direct_sum_.assign(pixels_ * 3, 0.0);
@@ -110,28 +110,28 @@ void ProgressiveRender::run_pass(RenderControl& control) {
         if (directional_exact_from_pass_ == 0) directional_exact_from_pass_ = index + 1;
     }
     stats_.merge(r.stats);
-    ++passes_done_;
+    ++iterations_done_;
     elapsed_ += seconds;
     last_radius_ = radius;
     // Knaus & Zwicker, 1-based: r_{i+1}² = r_i²·(i + α)/(i + 1), i = the passes now done.
-    const double i = static_cast<double>(passes_done_);
+    const double i = static_cast<double>(iterations_done_);
     radius_sq_ *= (i + static_cast<double>(settings_.alpha)) / (i + 1.0);
 }
 
 bool ProgressiveRender::finished() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (passes_done_ == 0) return false;
-    if (settings_.passes > 0 && passes_done_ >= settings_.passes) return true;
+    if (iterations_done_ == 0) return false;
+    if (settings_.iterations > 0 && iterations_done_ >= settings_.iterations) return true;
     if (settings_.time_limit > 0.0) {
-        const double per_pass = elapsed_ / passes_done_;
+        const double per_pass = elapsed_ / iterations_done_;
         if (elapsed_ + per_pass > settings_.time_limit) return true;
     }
     return false;
 }
 
-uint32_t ProgressiveRender::passes_done() const {
+uint32_t ProgressiveRender::iterations_done() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return passes_done_;
+    return iterations_done_;
 }
 
 float ProgressiveRender::radius() const {
@@ -152,7 +152,7 @@ double ProgressiveRender::elapsed() const {
 Stats ProgressiveRender::stats() const {
     std::lock_guard<std::mutex> lock(mutex_);
     Stats s = stats_;
-    s.values["passes"] = passes_done_;
+    s.values["passes"] = iterations_done_;
     s.values["radius"] = first_radius_;
     s.values["final_radius"] = last_radius_;
     s.values["alpha"] = settings_.alpha;
@@ -171,22 +171,22 @@ Stats ProgressiveRender::stats() const {
 
 std::vector<float> ProgressiveRender::image() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (passes_done_ == 0) return {};
-    return mean_of(rgba_sum_, passes_done_);
+    if (iterations_done_ == 0) return {};
+    return mean_of(rgba_sum_, iterations_done_);
 }
 
 RenderResult ProgressiveRender::result() const {
     RenderResult r;
     r.stats = stats();
     std::lock_guard<std::mutex> lock(mutex_);
-    if (passes_done_ == 0) return r;
+    if (iterations_done_ == 0) return r;
     r.width = camera_.width();
     r.height = camera_.height();
-    r.rgba = mean_of(rgba_sum_, passes_done_);
-    r.emission = mean_of(emission_sum_, passes_done_);
-    r.direct = mean_of(direct_sum_, passes_done_);
-    r.indirect = mean_of(indirect_sum_, passes_done_);
-    if (settings_.caustics_pass) r.caustics = mean_of(caustics_sum_, passes_done_);
+    r.rgba = mean_of(rgba_sum_, iterations_done_);
+    r.emission = mean_of(emission_sum_, iterations_done_);
+    r.direct = mean_of(direct_sum_, iterations_done_);
+    r.indirect = mean_of(indirect_sum_, iterations_done_);
+    if (settings_.caustics_pass) r.caustics = mean_of(caustics_sum_, iterations_done_);
     r.normal = normal_;
     r.depth = depth_;
     return r;
@@ -198,10 +198,10 @@ RenderResult render_progressive(const Scene& scene, const Camera& camera, const 
     while (!progressive.finished()) {
         try {
             control.check();
-            progressive.run_pass(control);
+            progressive.run_iteration(control);
         } catch (const Cancelled&) {
             // Nothing to show yet: the caller learns it was cancelled. Else the passes done are a valid image.
-            if (progressive.passes_done() == 0) throw;
+            if (progressive.iterations_done() == 0) throw;
             RenderResult r = progressive.result();
             r.stats.values["cancelled"] = 1.0;
             control.set_span(0.0, 1.0, "");

@@ -19,45 +19,7 @@
 
 namespace ps {
 
-namespace {
-
-constexpr uint64_t kMaxPhotons = 500'000'000;  // ~40 GB of photon records: beyond any machine we target
-constexpr uint32_t kMaxPasses = 1'000'000;      // r shrinks as passes^(−1/6): far past any useful radius
-constexpr double kMaxTimeLimit = 1e7;           // seconds, about 4 months
-
-template <typename T>
-void require(bool ok, const std::string& field, const std::string& what, T value) {
-    if (!ok) throw InvalidInput(field, what + ", got " + std::to_string(value));
-}
-
-}  // namespace
-
-void validate(const RenderSettings& s) {
-    require(s.photons <= kMaxPhotons, "photons", "must be at most " + std::to_string(kMaxPhotons), s.photons);
-    require(std::isfinite(s.radius) && s.radius >= 0.0f, "radius", "must be finite and >= 0 (0 = automatic)", s.radius);
-    require(s.max_bounces >= 0 && s.max_bounces <= 1000, "max_bounces", "must be in [0, 1000]", s.max_bounces);
-    require(s.threads >= 0 && s.threads <= 4096, "threads", "must be in [0, 4096] (0 = all cores)", s.threads);
-    require(s.direct_samples >= 1 && s.direct_samples <= 4096, "direct_samples", "must be in [1, 4096]",
-            s.direct_samples);
-    require(std::isfinite(s.normal_tolerance) && s.normal_tolerance > 0.0f && s.normal_tolerance <= 180.0f,
-            "normal_tolerance", "must be in (0, 180] degrees", s.normal_tolerance);
-    require(std::isfinite(s.plane_distance) && s.plane_distance >= 0.0f, "plane_distance",
-            "must be finite and >= 0 (0 = off)", s.plane_distance);
-    require(s.directional_level >= -1 && s.directional_level <= 64, "directional_level",
-            "must be in [-1, 64] (-1 = chosen from the radius)", s.directional_level);
-    require(s.passes <= kMaxPasses, "passes", "must be in [0, " + std::to_string(kMaxPasses) + "] (0 = until time_limit)",
-            s.passes);
-    require(std::isfinite(s.time_limit) && s.time_limit >= 0.0 && s.time_limit <= kMaxTimeLimit, "time_limit",
-            "must be in [0, " + std::to_string(int(kMaxTimeLimit)) + "] seconds (0 = none)", s.time_limit);
-    require(s.passes > 0 || s.time_limit > 0.0, "passes",
-            "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.passes);
-    require(std::isfinite(s.aimed_photons) && s.aimed_photons >= 0.0f && s.aimed_photons <= 16.0f, "aimed_photons",
-            "must be in [0, 16] (a fraction of photons; 0 = off)", s.aimed_photons);
-    require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
-            "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
-}
-
-uint64_t pass_seed(uint64_t seed, uint32_t pass) {
+uint64_t iteration_seed(uint64_t seed, uint32_t pass) {
     if (pass == 0) return seed;
     // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
     uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(pass) + 1));
@@ -74,14 +36,14 @@ float first_radius(const Scene& scene, const Camera& camera, const RenderSetting
     // correction removes the bias a smaller radius would trade that noise for (on the atrium a progressive
     // render with it reaches SSIM 0.9 in 20 passes from default_radius, 38 from the automatic radius). Only a
     // progressive render without it weighs the boundary bias against the noise its passes average away.
-    // directional's approximate passes are not corrected (render_pass), so it keeps the automatic radius.
+    // directional's approximate passes are not corrected (render_iteration), so it keeps the automatic radius.
     const bool corrected = settings.boundary_correction && settings.method != SplatMethod::directional;
-    if (settings.passes == 1 || corrected) return default_radius(scene, settings.photons);
+    if (settings.iterations == 1 || corrected) return default_radius(scene, settings.photons);
     return automatic_radius(scene, camera, settings.photons);
 }
 
-RenderResult render_pass(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
-                         const PassParams& pass, RenderControl& control) {
+RenderResult render_iteration(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
+                         const IterationParams& pass, RenderControl& control) {
     validate(settings);
     const Camera camera = world_camera.relative_to(scene.origin());  // every stage works in render space
     RenderResult result;
@@ -92,7 +54,7 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
     MemoryBudget budget(settings.memory_budget, stats);
     reserve_frame(budget, scene, camera, settings);
     const float radius = pass.radius;
-    const uint64_t seed = pass_seed(settings.seed, pass.index);
+    const uint64_t seed = iteration_seed(settings.seed, pass.index);
     stats.values["radius"] = radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = width;
@@ -287,10 +249,10 @@ RenderResult render_pass(const Scene& scene, const Camera& world_camera, const R
 
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
     validate(settings);
-    if (settings.passes != 1) return render_progressive(scene, camera, settings, control);
-    PassParams pass;
+    if (settings.iterations != 1) return render_progressive(scene, camera, settings, control);
+    IterationParams pass;
     pass.radius = first_radius(scene, camera, settings);
-    RenderResult result = render_pass(scene, camera, settings, pass, control);
+    RenderResult result = render_iteration(scene, camera, settings, pass, control);
     result.stats.values["passes"] = 1.0;
     return result;
 }

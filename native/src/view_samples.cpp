@@ -130,7 +130,7 @@ bool trace_camera_path(const Scene& scene, const Camera& camera, CameraPath path
 ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera, const ViewSampleSettings& settings,
                                   const RenderControl& control, Stats& stats) {
     StageTimer timer(stats, "view_samples");
-    // Render space (scene.h); render_pass has done it already, but this stage is also called on its own.
+    // Render space (scene.h); render_iteration has done it already, but this stage is also called on its own.
     const Camera camera = world_camera.relative_to(scene.origin());
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;

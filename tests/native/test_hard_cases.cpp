@@ -343,7 +343,7 @@ TEST(HardCases, ProgressiveAndReferenceRenderMovedScenesAlikeAndTheOriginFollows
     RenderSettings settings;
     settings.photons = 10000;
     settings.radius = 0.1f;
-    settings.passes = 2;
+    settings.iterations = 2;
     RenderControl control;
     const RenderResult a = render(at_origin, test::moved_cornell_camera(glm::dvec3(0.0), 16, 16), settings, control);
     const RenderResult b = render(moved, test::moved_cornell_camera(far, 16, 16), settings, control);

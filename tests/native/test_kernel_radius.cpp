@@ -100,7 +100,7 @@ TEST(KernelRadius, OnlyProgressiveRendersTheCorrectionDoesNotCoverStartAtTheAuto
     ASSERT_LT(automatic_radius(scene, camera, 2000), default_radius(scene, 2000));
     RenderControl control;
     const auto first_radius_of = [&](uint32_t passes, bool correction, SplatMethod method = SplatMethod::cluster_cone) {
-        settings.passes = passes;
+        settings.iterations = passes;
         settings.boundary_correction = correction;
         settings.method = method;
         return static_cast<float>(render(scene, camera, settings, control).stats.values.at("radius"));

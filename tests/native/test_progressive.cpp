@@ -36,12 +36,12 @@ TEST(Progressive, OnePassIsTheOneShotRenderBitForBit) {
     const Camera camera = test::cornell_camera(32, 24);
     RenderSettings settings = small_settings();
     RenderControl control;
-    PassParams pass0;
+    IterationParams pass0;
     pass0.radius = first_radius(cornell(), camera, settings);
-    const RenderResult one_shot = render_pass(cornell(), camera, settings, pass0, control);
+    const RenderResult one_shot = render_iteration(cornell(), camera, settings, pass0, control);
     const RenderResult rendered = render(cornell(), camera, settings, control);  // passes = 1
     ProgressiveRender progressive(cornell(), camera, settings);
-    progressive.run_pass(control);
+    progressive.run_iteration(control);
     const RenderResult mean = progressive.result();
     ASSERT_EQ(one_shot.rgba.size(), 32u * 24u * 4u);
     EXPECT_EQ(one_shot.rgba, rendered.rgba);
@@ -55,7 +55,7 @@ TEST(Progressive, RadiusShrinksAsKnausZwickerAndPassesDiffer) {
     const Camera camera = test::cornell_camera(16, 16);
     RenderSettings settings = small_settings();
     settings.radius = 0.2f;
-    settings.passes = 5;
+    settings.iterations = 5;
     ProgressiveRender progressive(cornell(), camera, settings);
     RenderControl control;
     double r2 = 0.04;
@@ -63,7 +63,7 @@ TEST(Progressive, RadiusShrinksAsKnausZwickerAndPassesDiffer) {
     for (int i = 1; i <= 5; ++i) {
         EXPECT_NEAR(progressive.next_radius(), std::sqrt(r2), 1e-6) << "pass " << i;
         EXPECT_FALSE(progressive.finished());
-        progressive.run_pass(control);
+        progressive.run_iteration(control);
         EXPECT_NEAR(progressive.radius(), std::sqrt(r2), 1e-6);
         r2 *= (i + 2.0 / 3.0) / (i + 1.0);
         std::vector<float> image = progressive.image();
@@ -71,9 +71,9 @@ TEST(Progressive, RadiusShrinksAsKnausZwickerAndPassesDiffer) {
         previous = image;
     }
     EXPECT_TRUE(progressive.finished());
-    EXPECT_EQ(progressive.passes_done(), 5u);
-    EXPECT_NE(pass_seed(3, 1), pass_seed(3, 2));
-    EXPECT_EQ(pass_seed(3, 0), 3u);
+    EXPECT_EQ(progressive.iterations_done(), 5u);
+    EXPECT_NE(iteration_seed(3, 1), iteration_seed(3, 2));
+    EXPECT_EQ(iteration_seed(3, 0), 3u);
 }
 
 TEST(Progressive, BadSettingsAreRefusedByName) {
@@ -87,7 +87,7 @@ TEST(Progressive, BadSettingsAreRefusedByName) {
         return "";
     };
     RenderSettings s = small_settings();
-    s.passes = 0;  // no pass limit and no time limit: would never end
+    s.iterations = 0;  // no pass limit and no time limit: would never end
     EXPECT_EQ(field_of(s), "passes");
     s.time_limit = 1.0;
     EXPECT_EQ(field_of(s), "");

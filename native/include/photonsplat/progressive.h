@@ -7,7 +7,7 @@
 // and bias ∝ N^(α−1), both → 0, balanced at α = 2/3: mean squared error ∝ N^(−2/3). Direct light and emission
 // are re-estimated every pass (new shadow rays, jittered pixels) and averaged the same way.
 //
-// Pass 1 is exactly render_pass of pass 0: the user's seed, pixel-centred rays, the one-shot radius; so a
+// Pass 1 is exactly render_iteration of pass 0: the user's seed, pixel-centred rays, the one-shot radius; so a
 // progressive render stopped after one pass is the paper's one-shot image, bit for bit.
 //
 // The approximate `directional` method falls back, per pass, to the exact `cluster` splat once the median leaf
@@ -36,15 +36,15 @@ public:
 
     // Renders the next pass and adds it to the mean. Throws Cancelled when control asks to stop, leaving the
     // mean as it was; std::runtime_error when another thread is already running a pass on this object.
-    void run_pass(RenderControl& control);
+    void run_iteration(RenderControl& control);
 
-    // settings.passes are done, or (time_limit > 0) the next pass, predicted to take the mean pass time so far,
+    // settings.iterations are done, or (time_limit > 0) the next pass, predicted to take the mean pass time so far,
     // would end past time_limit. False before the first pass.
     bool finished() const;
 
     int width() const { return camera_.width(); }
     int height() const { return camera_.height(); }
-    uint32_t passes_done() const;
+    uint32_t iterations_done() const;
     float radius() const;       // the radius of the last pass done (before any: of the first pass)
     float next_radius() const;  // the radius the next pass will use
     double elapsed() const;     // seconds spent choosing the first radius and in completed passes (not between)
@@ -66,7 +66,7 @@ private:
     std::atomic<bool> running_{false};
 
     mutable std::mutex mutex_;  // guards everything below
-    uint32_t passes_done_ = 0;
+    uint32_t iterations_done_ = 0;
     double radius_sq_;          // of the next pass
     float last_radius_;
     float first_radius_;
