@@ -133,12 +133,9 @@ py::dict stats_dict(const ps::Stats& stats) {
 
 py::dict pass_images(const ps::RenderResult& r) {
     py::dict images;
-    images["emission"] = image_array(r.emission, r.height, r.width, 3);
-    images["direct"] = image_array(r.direct, r.height, r.width, 3);
-    images["indirect"] = image_array(r.indirect, r.height, r.width, 3);
-    images["normal"] = image_array(r.normal, r.height, r.width, 3);
-    images["depth"] = image_array(r.depth, r.height, r.width, 1);
-    if (!r.caustics.empty()) images["caustics"] = image_array(r.caustics, r.height, r.width, 3);
+    for (const ps::FilmOutputInfo& info : ps::film_outputs())
+        if (info.output != ps::FilmOutput::combined && r.film.has(info.output))
+            images[info.name] = image_array(r.film[info.output], r.height(), r.width(), info.channels);
     return images;
 }
 

@@ -63,13 +63,19 @@ ps::RenderSettings make_settings(uint64_t photons, float radius, const std::stri
     return s;
 }
 
-// Renders one frame off the GIL (see background.h); returns (image, stats[, passes]).
+// Renders one frame off the GIL (see background.h); returns (image, stats[, passes]). Without passes only the
+// combined image is made: the film holds no other output, and no caustic splat is run.
 py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::RenderSettings& settings,
                   const py::object& progress, bool passes) {
     ps::validate(settings);
+    ps::RenderSettings own = settings;
+    if (!passes) {
+        own.outputs = ps::film_bit(ps::FilmOutput::combined);
+        own.caustics_pass = false;
+    }
     const ps::RenderResult r = run_in_background<ps::RenderResult>(
-        progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, settings, control); });
-    py::array_t<float> image = image_array(r.rgba, r.height, r.width, 4);
+        progress, [&](ps::RenderControl& control) { return ps::render(scene, camera, own, control); });
+    py::array_t<float> image = image_array(r.rgba(), r.height(), r.width(), 4);
     if (!passes) return py::make_tuple(image, stats_dict(r.stats));
     return py::make_tuple(image, stats_dict(r.stats), pass_images(r));
 }

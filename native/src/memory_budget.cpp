@@ -6,13 +6,19 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/photons.h"
-#include "photonsplat/render.h"
+#include "photonsplat/film.h"
+#include "photonsplat/settings.h"
+#include "photonsplat/splatter.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/view_samples.h"
@@ -45,15 +51,18 @@ uint64_t cgroup_limit() {
     return 0;
 }
 
-// Bytes a pair takes at the peak in the cluster and tiled splats: 4 in the traversal/binning buffers, 4 in the
-// sorted lists, and the growth slack of the buffers (see cluster.cpp and tiled.cpp).
-constexpr double kBytesPerPair = 9.0;
 // The cap never goes below this many pairs: below it the splat would run in thousands of batches.
 constexpr uint64_t kMinPairCap = uint64_t(1) << 20;
 
-// The methods that splat onto the view-sample cluster hierarchy (tiled, gather and brute do not build it).
-bool builds_hierarchy(SplatMethod method) {
-    return method == SplatMethod::cluster || method == SplatMethod::cluster_cone || method == SplatMethod::directional;
+// The per-sample structures of the hierarchy a method splats onto (none for the methods that build none), by
+// Stats::bytes name, for `samples` view samples.
+std::vector<std::pair<const char*, double>> hierarchy_structures(const Splatter& splatter, size_t samples) {
+    const std::optional<ClusterBuildOptions> options = splatter.hierarchy_options();
+    if (!options) return {};
+    std::vector<std::pair<const char*, double>> structures = {{"hierarchy", predict_hierarchy_bytes(samples)}};
+    if (options->normal_cones) structures.emplace_back("cones", predict_cone_bytes(samples));
+    if (options->leaf_summaries) structures.emplace_back("leaf_summaries", predict_leaf_summary_bytes(samples));
+    return structures;
 }
 
 }  // namespace
@@ -106,9 +115,15 @@ double predict_per_sample_light_bytes(size_t samples) { return double(samples) *
 
 double predict_kernel_coverage_bytes(size_t samples) { return double(samples) * double(sizeof(float)); }
 
-double predict_image_bytes(int width, int height, bool caustics_pass) {
-    // RGBA, emission, direct, indirect, normal, depth (+ caustics)
-    const double floats = 4 + 3 * 3 + 3 + 1 + (caustics_pass ? 3 : 0);
+double predict_image_bytes(int width, int height, FilmOutputSet outputs) {
+    // The film's outputs, and the emission, direct and indirect images that combined is summed from where the film
+    // does not keep them.
+    outputs |= film_bit(FilmOutput::combined);
+    double floats = 0.0;
+    for (const FilmOutputInfo& info : film_outputs())
+        if (outputs & film_bit(info.output)) floats += info.channels;
+    for (FilmOutput part : {FilmOutput::emission, FilmOutput::direct, FilmOutput::indirect})
+        if (!(outputs & film_bit(part))) floats += 3;
     return double(width) * double(height) * floats * sizeof(float);
 }
 
@@ -157,64 +172,6 @@ double predict_leaf_summary_bytes(size_t samples) {
 
 double predict_cone_bytes(size_t samples) { return 2.0 * double(samples) * double(sizeof(NormalCone) + 1); }
 
-SplatMemory predict_splat_memory(SplatMethod method, size_t samples, size_t photons, const ClusterHierarchy* hierarchy,
-                                 const Camera& camera, Kernel kernel, int threads) {
-    SplatMemory m;
-    const double s = double(samples), p = double(photons);
-    const double nodes = hierarchy ? double(hierarchy->nodes.size()) : 0.0;
-    const double positions = p * double(sizeof(glm::vec3));  // photon positions relative to the samples' origin
-    const double sums = s * double(sizeof(glm::dvec3));      // per-sample sums kept between batches
-    switch (method) {
-        case SplatMethod::brute:
-            m.fixed["photon_positions"] = positions;
-            break;
-        case SplatMethod::gather:
-            // Grid photons (position, index, record), the sort entries they are made from, the hash table (at most
-            // 2 cells per photon rounded up to a power of two: 4 × 16 bytes a photon), the positions.
-            m.fixed["photon_grid"] = p * double(sizeof(glm::vec3) + 4 + sizeof(Photon)) + p * 4.0 * 16.0;
-            m.fixed["photon_positions"] = positions + p * 16.0;
-            // Each thread's candidate list and near list hold at most every photon once.
-            m.fixed["gather_lists"] = double(std::max(threads, 1)) * std::min(p, 65536.0) * 16.0;
-            break;
-        case SplatMethod::tiled: {
-            const double tiles = std::ceil(camera.width() / 32.0) * std::ceil(camera.height() / 32.0);
-            m.fixed["tile_bounds"] = tiles * (12.0 + 2.0 * 24.0) + (camera.width() + camera.height()) * 16.0 / 32.0 + 64.0;
-            m.fixed["tile_samples"] = (s + tiles + s / 32.0 + 2.0) * 4.0;
-            m.fixed["photon_positions"] = positions;
-            m.pair_key = "tile_photon_lists";
-            m.pair_fixed = p * 8.0 + tiles * 8.0 + double(std::max(threads, 1)) * 64.0;  // counts, offsets, chunks
-            m.fixed["splat_sample_sums"] = sums;
-            m.per_pair = kBytesPerPair;
-            break;
-        }
-        case SplatMethod::cluster:
-        case SplatMethod::cluster_cone:
-            m.fixed["photon_positions"] = positions;
-            m.fixed["splat_sample_sums"] = sums;
-            m.pair_key = "leaf_photon_lists";
-            m.pair_fixed = (nodes + 2.0) * double(sizeof(size_t));  // per-node offsets of a batch
-            m.per_pair = kBytesPerPair;
-            if (method == SplatMethod::cluster_cone) {
-                m.fixed["cone_traversal_nodes"] = nodes * 48.0;
-                m.fixed["accepted_flux"] = nodes * (32.0 + (kernel == Kernel::uniform ? 0.0 : 5.0 * 24.0));
-            }
-            break;
-        case SplatMethod::directional:
-            // 8 direction bins × 6 slots of 8 bytes per node at most (the cut level has fewer), and the cut's
-            // bookkeeping (facets, cuts, walk, parent/height/order) per node, the cut of every sample.
-            m.fixed["direction_bins"] = nodes * 8.0 * 6.0 * 8.0;
-            m.fixed["directional_nodes"] = nodes * 256.0 + s * 8.0;
-            m.fixed["photon_positions"] = positions;
-            // When the radius is below a leaf's size it falls back to the exact cluster splat and its pair lists.
-            m.fixed["splat_sample_sums"] = sums;
-            m.pair_key = "leaf_photon_lists";
-            m.pair_fixed = (nodes + 2.0) * double(sizeof(size_t));
-            m.per_pair = kBytesPerPair;
-            break;
-    }
-    return m;
-}
-
 void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camera, const RenderSettings& settings) {
     const int w = camera.width(), h = camera.height();
     const size_t samples = size_t(w) * size_t(h);  // one a pixel; reserve_split_samples adds the rest
@@ -233,21 +190,18 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     // While tracing, the photons sit in per-chunk vectors (up to twice their size) before the map is filled.
     budget.reserve("photon_trace_scratch", 2.0 * photon_map, "photons");
     budget.release("photon_trace_scratch");
-    if (builds_hierarchy(settings.method))
-        budget.reserve("hierarchy", predict_hierarchy_bytes(samples), "resolution");
-    if (settings.method == SplatMethod::cluster_cone) budget.reserve("cones", predict_cone_bytes(samples), "resolution");
-    if (settings.method == SplatMethod::directional)
-        budget.reserve("leaf_summaries", predict_leaf_summary_bytes(samples), "resolution");
+    for (const auto& [structure, bytes] : hierarchy_structures(*make_splatter(settings), samples))
+        budget.reserve(structure, bytes, "resolution");
     budget.reserve("indirect_light", predict_per_sample_light_bytes(samples), "resolution");
     if (settings.boundary_correction)  // with the index of each pixel's first sample (samples = pixels here)
         budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples) + double(samples) * sizeof(uint32_t),
                        "resolution");
-    if (settings.caustics_pass) {
+    if (requested_outputs(settings) & film_bit(FilmOutput::caustics)) {
         // The caustic photons copied out of the map, and their own splat's light.
         budget.reserve("caustic_photons", photon_map, "photons");
         budget.reserve("caustic_light", predict_per_sample_light_bytes(samples), "resolution");
     }
-    budget.reserve("image", predict_image_bytes(w, h, settings.caustics_pass), "resolution");
+    budget.reserve("image", predict_image_bytes(w, h, requested_outputs(settings)), "resolution");
 }
 
 void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples) {
@@ -259,13 +213,13 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
     };
     budget.reserve("view_samples", double(samples - pixels) * double(sizeof(ViewSample)), "resolution");
     grow("direct_light", predict_per_sample_light_bytes);
-    if (builds_hierarchy(settings.method))
-        grow("hierarchy", predict_hierarchy_bytes);
-    if (settings.method == SplatMethod::cluster_cone) grow("cones", predict_cone_bytes);
-    if (settings.method == SplatMethod::directional) grow("leaf_summaries", predict_leaf_summary_bytes);
+    const std::unique_ptr<Splatter> splatter = make_splatter(settings);
+    const auto before = hierarchy_structures(*splatter, pixels), after = hierarchy_structures(*splatter, samples);
+    for (size_t i = 0; i < after.size(); ++i)
+        budget.reserve(after[i].first, after[i].second - before[i].second, "resolution");
     grow("indirect_light", predict_per_sample_light_bytes);
     if (settings.boundary_correction) grow("kernel_coverage", predict_kernel_coverage_bytes);
-    if (settings.caustics_pass) grow("caustic_light", predict_per_sample_light_bytes);
+    if (requested_outputs(settings) & film_bit(FilmOutput::caustics)) grow("caustic_light", predict_per_sample_light_bytes);
 }
 
 void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,
@@ -276,7 +230,7 @@ void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSe
     reserve_frame(budget, scene, camera, settings);
 }
 
-uint64_t fit_pair_cap(MemoryBudget& budget, SplatMethod method, const SplatMemory& memory) {
+uint64_t fit_pair_cap(MemoryBudget& budget, const SplatMemory& memory) {
     const std::string lower = "photons or resolution";
     for (const auto& [name, bytes] : memory.fixed) budget.reserve(name, bytes, lower);
     if (memory.per_pair <= 0.0) return kDefaultMaxPairsInMemory;

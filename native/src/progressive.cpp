@@ -10,25 +10,11 @@
 #include "photonsplat/memory_budget.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/splatter.h"
 
 namespace ps {
 
 namespace {
-
-// Per pixel: the double sums of rgba (4) and of the emission, direct, indirect and caustics components (3 each),
-// and pass 0's normal and depth.
-constexpr double kSumBytesPerPixel = 16 * sizeof(double) + 4 * sizeof(float);
-
-void add_to(std::vector<double>& sum, const std::vector<float>& pass) {
-    for (size_t i = 0; i < sum.size(); ++i) sum[i] += static_cast<double>(pass[i]);
-}
-
-std::vector<float> mean_of(const std::vector<double>& sum, uint32_t passes) {
-    std::vector<float> mean(sum.size());
-    const double n = static_cast<double>(passes);
-    for (size_t i = 0; i < sum.size(); ++i) mean[i] = static_cast<float>(sum[i] / n);
-    return mean;
-}
 
 // Clears, on every exit, the flag that keeps two passes from running at once on one object.
 struct RunningFlag {
@@ -44,8 +30,9 @@ struct RunningFlag {
 ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, const RenderSettings& settings)
     : scene_(scene), camera_(camera.relative_to(scene.origin())), settings_(settings) {
     validate(settings_);
-    check_frame_memory(scene_, camera_, settings_, kSumBytesPerPixel);
-    pixels_ = static_cast<size_t>(camera_.width()) * camera_.height();
+    check_frame_memory(scene_, camera_, settings_, FilmAccumulator::bytes_per_pixel(requested_outputs(settings_)));
+    film_ = FilmAccumulator(camera_.width(), camera_.height(), requested_outputs(settings_));
+    exact_method_ = splat_method_info(settings_.method).exact;
     // Choosing the automatic radius traces rays (kernel_radius.h): it is part of the render's time.
     const auto started = std::chrono::steady_clock::now();
     first_radius_ = first_radius(scene_, camera_, settings_);
@@ -90,24 +77,10 @@ void ProgressiveRender::run_iteration(RenderControl& control) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
 
     std::lock_guard<std::mutex> lock(mutex_);
-    if (iterations_done_ == 0) {
-        rgba_sum_.assign(pixels_ * 4, 0.0);
-        emission_sum_.assign(pixels_ * 3, 0.0);
-        direct_sum_.assign(pixels_ * 3, 0.0);
-        indirect_sum_.assign(pixels_ * 3, 0.0);
-        if (settings_.caustics_pass) caustics_sum_.assign(pixels_ * 3, 0.0);
-        normal_ = std::move(r.normal);
-        depth_ = std::move(r.depth);
-    }
-    add_to(rgba_sum_, r.rgba);
-    add_to(emission_sum_, r.emission);
-    add_to(direct_sum_, r.direct);
-    add_to(indirect_sum_, r.indirect);
-    if (settings_.caustics_pass) add_to(caustics_sum_, r.caustics);
-    const auto fallback = r.stats.values.find("directional_exact_fallback");
-    if (settings_.method == SplatMethod::directional && fallback != r.stats.values.end() && fallback->second > 0.0) {
-        ++directional_exact_passes_;
-        if (directional_exact_from_pass_ == 0) directional_exact_from_pass_ = index + 1;
+    film_.add(r.film);
+    if (r.kernel_estimate) {
+        ++kernel_estimate_iterations_;
+        if (first_kernel_estimate_iteration_ == 0) first_kernel_estimate_iteration_ = index + 1;
     }
     stats_.merge(r.stats);
     ++iterations_done_;
@@ -152,43 +125,31 @@ double ProgressiveRender::elapsed() const {
 Stats ProgressiveRender::stats() const {
     std::lock_guard<std::mutex> lock(mutex_);
     Stats s = stats_;
-    s.values["passes"] = iterations_done_;
+    s.values["iterations"] = iterations_done_;
     s.values["radius"] = first_radius_;
     s.values["final_radius"] = last_radius_;
     s.values["alpha"] = settings_.alpha;
     s.values["time_limit"] = settings_.time_limit;
     s.values["elapsed"] = elapsed_;
     s.values["photons"] = static_cast<double>(settings_.photons);
-    if (settings_.method == SplatMethod::directional) {
-        s.values["directional_exact_passes"] = directional_exact_passes_;
-        s.values["directional_exact_from_pass"] = directional_exact_from_pass_;
+    if (!exact_method_) {  // how often the approximate method's own estimate gave way to the exact splat
+        s.values["exact_iterations"] = kernel_estimate_iterations_;
+        s.values["exact_from_iteration"] = first_kernel_estimate_iteration_;
     }
-    s.bytes["progressive_sums"] =
-        static_cast<double>((rgba_sum_.size() + emission_sum_.size() + direct_sum_.size() + indirect_sum_.size() +
-                             caustics_sum_.size()) * sizeof(double) + (normal_.size() + depth_.size()) * sizeof(float));
+    s.bytes["progressive_sums"] = static_cast<double>(film_.bytes());
     return s;
 }
 
 std::vector<float> ProgressiveRender::image() const {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (iterations_done_ == 0) return {};
-    return mean_of(rgba_sum_, iterations_done_);
+    return film_.mean(FilmOutput::combined);
 }
 
 RenderResult ProgressiveRender::result() const {
     RenderResult r;
     r.stats = stats();
     std::lock_guard<std::mutex> lock(mutex_);
-    if (iterations_done_ == 0) return r;
-    r.width = camera_.width();
-    r.height = camera_.height();
-    r.rgba = mean_of(rgba_sum_, iterations_done_);
-    r.emission = mean_of(emission_sum_, iterations_done_);
-    r.direct = mean_of(direct_sum_, iterations_done_);
-    r.indirect = mean_of(indirect_sum_, iterations_done_);
-    if (settings_.caustics_pass) r.caustics = mean_of(caustics_sum_, iterations_done_);
-    r.normal = normal_;
-    r.depth = depth_;
+    r.film = film_.mean();
     return r;
 }
 

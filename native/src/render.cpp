@@ -1,6 +1,7 @@
 #include "photonsplat/render.h"
 
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include <glm/geometric.hpp>
@@ -15,14 +16,15 @@
 #include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/splatter.h"
 #include "photonsplat/view_samples.h"
 
 namespace ps {
 
-uint64_t iteration_seed(uint64_t seed, uint32_t pass) {
-    if (pass == 0) return seed;
-    // SplitMix64 of (seed, pass): passes draw from unrelated streams, and pass 0 keeps the user's seed.
-    uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(pass) + 1));
+uint64_t iteration_seed(uint64_t seed, uint32_t iteration) {
+    if (iteration == 0) return seed;
+    // SplitMix64 of (seed, iteration): iterations draw from unrelated streams, and iteration 0 keeps the user's seed.
+    uint64_t z = seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(iteration) + 1));
     z += 0x9E3779B97F4A7C15ull;
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -31,34 +33,132 @@ uint64_t iteration_seed(uint64_t seed, uint32_t pass) {
 
 float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings) {
     if (settings.radius > 0.0f) return settings.radius;
-    // A single pass keeps all of its photon noise, which a smaller radius would raise: it stays at the noise
-    // limit (on the atrium's one-shot 200k image half the radius lowers SSIM 0.655 -> 0.614). The boundary
-    // correction removes the bias a smaller radius would trade that noise for (on the atrium a progressive
-    // render with it reaches SSIM 0.9 in 20 passes from default_radius, 38 from the automatic radius). Only a
-    // progressive render without it weighs the boundary bias against the noise its passes average away.
-    // directional's approximate passes are not corrected (render_iteration), so it keeps the automatic radius.
-    const bool corrected = settings.boundary_correction && settings.method != SplatMethod::directional;
+    // A single iteration keeps all of its photon noise, which a smaller radius would raise: it stays at the noise
+    // limit. The boundary correction removes the bias a smaller radius would trade that noise for, so only a
+    // progressive render without it weighs the boundary bias against the noise its iterations average away
+    // (docs/results/README.md, "Automatic radius" and "Boundary correction", has the measurements). An
+    // approximate method's estimates are not corrected, so it keeps the automatic radius.
+    const bool corrected = settings.boundary_correction && splat_method_info(settings.method).exact;
     if (settings.iterations == 1 || corrected) return default_radius(scene, settings.photons);
     return automatic_radius(scene, camera, settings.photons);
 }
 
+namespace {
+
+// The photons' side of the splat test, from the settings and this iteration's radius.
+SplatParams splat_params(const RenderSettings& settings, float radius, uint64_t emitted) {
+    SplatParams params;
+    params.radius = radius;
+    params.cos_normal_tolerance = std::cos(settings.normal_tolerance * 3.14159265358979f / 180.0f);
+    params.plane_distance_factor = settings.plane_distance;
+    params.emitted = std::max<uint64_t>(emitted, 1);
+    params.kernel = settings.kernel;
+    return params;
+}
+
+// Stage 3: the view-sample cluster hierarchy, for the methods that splat onto one.
+std::optional<ClusterHierarchy> build_hierarchy(const Splatter& splatter, const ViewSamples& samples,
+                                                const Camera& camera, RenderControl& control, Stats& stats) {
+    const std::optional<ClusterBuildOptions> options = splatter.hierarchy_options();
+    if (!options) return std::nullopt;
+    control.begin_stage("cluster hierarchy", 0.45, 0.5);
+    std::optional<ClusterHierarchy> hierarchy;
+    {
+        StageTimer t(stats, "hierarchy_build");
+        hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), *options);
+    }
+    stats.bytes["hierarchy"] = static_cast<double>(hierarchy->bytes());
+    if (!hierarchy->leaf_summaries.empty()) stats.bytes["leaf_summaries"] = static_cast<double>(hierarchy->summary_bytes());
+    stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy->nodes.size());
+    stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy->leaves.size());
+    control.check();
+    return hierarchy;
+}
+
+// The photons a caustics output splats a second time, alone, over the same view samples and hierarchy: the same
+// estimate restricted to those photons.
+PhotonMap caustic_photons_of(const PhotonMap& photons) {
+    PhotonMap caustic;
+    caustic.emitted = photons.emitted;
+    for (const Photon& p : photons.photons)
+        if (p.flags & kCaustic) caustic.photons.push_back(p);
+    return caustic;
+}
+
+// Stage 6½: divides each sample's splatted light by the part of its kernel on a like-facing surface
+// (kernel_coverage.h). Only kernel estimates are rescaled.
+void correct_boundaries(const Scene& scene, const ViewSamples& samples, const SplatParams& params, uint64_t seed,
+                        std::vector<std::vector<glm::vec3>*> lights, RenderControl& control, Stats& stats) {
+    StageTimer t(stats, "kernel_coverage");
+    const std::vector<float> coverage = kernel_coverage(scene, samples, params, seed, control, stats);
+    for (std::vector<glm::vec3>* light : lights)
+        for (size_t i = 0; i < coverage.size(); ++i) (*light)[i] /= coverage[i];
+}
+
+// A per-sample light summed into its pixels (a pixel's samples add up: view_samples.h), 3 floats a pixel.
+std::vector<float> pixel_sums(const ViewSamples& samples, const std::vector<glm::vec3>& light, size_t pixels) {
+    std::vector<float> image(pixels * 3, 0.0f);
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        const size_t p = samples.samples[i].pixel;
+        for (int c = 0; c < 3; ++c) image[3 * p + c] += light[i][c];
+    }
+    return image;
+}
+
+// Stage 7: the film's outputs from the view samples and the light at them.
+Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& direct,
+                  const std::vector<glm::vec3>& indirect, const std::vector<glm::vec3>* caustics,
+                  const RenderSettings& settings, Stats& stats) {
+    const size_t pixels = static_cast<size_t>(samples.width) * samples.height;
+    Film film(samples.width, samples.height, requested_outputs(settings));
+    std::vector<float> emission(pixels * 3, 0.0f);
+    for (size_t p = 0; p < pixels; ++p) {
+        // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles): the
+        // background seen through glass or in mirrors stays.
+        const bool escaped = samples.alpha[p] == 0.0f;
+        if (!(settings.transparent && escaped))
+            for (int c = 0; c < 3; ++c) emission[3 * p + c] = samples.emission[p][c];
+        if (escaped) continue;
+        if (film.has(FilmOutput::normal))
+            for (int c = 0; c < 3; ++c) film[FilmOutput::normal][3 * p + c] = samples.first_normal[p][c];
+        if (film.has(FilmOutput::depth)) film[FilmOutput::depth][p] = samples.first_depth[p];
+    }
+    std::vector<float> direct_image = pixel_sums(samples, direct, pixels);
+    std::vector<float> indirect_image = pixel_sums(samples, indirect, pixels);
+    std::vector<float>& rgba = film[FilmOutput::combined];
+    for (size_t p = 0; p < pixels; ++p) {
+        for (int c = 0; c < 3; ++c)
+            rgba[4 * p + c] = emission[3 * p + c] + direct_image[3 * p + c] + indirect_image[3 * p + c];
+        rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
+    }
+    if (film.has(FilmOutput::emission)) film[FilmOutput::emission] = std::move(emission);
+    if (film.has(FilmOutput::direct)) film[FilmOutput::direct] = std::move(direct_image);
+    if (film.has(FilmOutput::indirect)) film[FilmOutput::indirect] = std::move(indirect_image);
+    if (caustics && film.has(FilmOutput::caustics)) film[FilmOutput::caustics] = pixel_sums(samples, *caustics, pixels);
+    // The film, and the images combined was summed from that it does not keep.
+    stats.bytes["image"] =
+        double(film.bytes() + (emission.size() + direct_image.size() + indirect_image.size()) * sizeof(float));
+    return film;
+}
+
+}  // namespace
+
 RenderResult render_iteration(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
-                         const IterationParams& pass, RenderControl& control) {
+                              const IterationParams& iteration, RenderControl& control) {
     validate(settings);
     const Camera camera = world_camera.relative_to(scene.origin());  // every stage works in render space
+    const std::unique_ptr<Splatter> splatter = make_splatter(settings);
     RenderResult result;
-    const int width = camera.width(), height = camera.height();
-    const size_t pixels = static_cast<size_t>(width) * height;
+    const size_t pixels = static_cast<size_t>(camera.width()) * camera.height();
     Stats& stats = result.stats;
     // Every large structure is predicted before it is allocated: a frame that cannot fit is refused here.
     MemoryBudget budget(settings.memory_budget, stats);
     reserve_frame(budget, scene, camera, settings);
-    const float radius = pass.radius;
-    const uint64_t seed = iteration_seed(settings.seed, pass.index);
-    stats.values["radius"] = radius;
+    const uint64_t seed = iteration_seed(settings.seed, iteration.index);
+    stats.values["radius"] = iteration.radius;
     stats.values["photons"] = static_cast<double>(settings.photons);
-    stats.values["width"] = width;
-    stats.values["height"] = height;
+    stats.values["width"] = camera.width();
+    stats.values["height"] = camera.height();
     stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
     stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
     stats.counters["lights"] = static_cast<double>(scene.lights().size());
@@ -73,14 +173,16 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         }
         control.check();
 
+        // 1. View samples: camera paths to their first diffuse or glossy hit.
         control.begin_stage("view samples", 0.02, 0.15);
         ViewSampleSettings view_settings;
         view_settings.seed = seed;
-        view_settings.jitter = pass.index > 0;
+        view_settings.jitter = iteration.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
         reserve_split_samples(budget, settings, pixels, samples.samples.size());
 
+        // 2. Direct light at the view samples.
         control.begin_stage("direct light", 0.15, 0.35);
         DirectLightSettings direct_settings;
         direct_settings.seed = seed;
@@ -88,6 +190,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
         stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
 
+        // 4. Photons (before the hierarchy, whose memory is reserved already, so that the splat's is known).
         control.begin_stage("photons", 0.35, 0.45);
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
@@ -96,152 +199,52 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         photon_settings.guide = settings.guide_photons;
         photon_settings.aimed_fraction = settings.aimed_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
+        const bool caustics_output = (requested_outputs(settings) & film_bit(FilmOutput::caustics)) != 0;
+        const PhotonMap caustic_photons = caustics_output ? caustic_photons_of(photons) : PhotonMap();
 
-        SplatParams params;
-        params.radius = radius;
-        params.cos_normal_tolerance = std::cos(settings.normal_tolerance * 3.14159265358979f / 180.0f);
-        params.plane_distance_factor = settings.plane_distance;
-        params.emitted = std::max<uint64_t>(photons.emitted, 1);
-        params.kernel = settings.kernel;
-        params.directional_level = settings.directional_level;
-        // The caustics pass splats the caustic photons a second time, alone, over the same view samples and
-        // hierarchy: exact (the same estimate restricted to those photons), and free when the pass is off.
-        PhotonMap caustic_photons;
-        if (settings.caustics_pass) {
-            caustic_photons.emitted = photons.emitted;
-            for (const Photon& p : photons.photons)
-                if (p.flags & kCaustic) caustic_photons.photons.push_back(p);
-        }
-        const double splat_end = settings.caustics_pass ? 0.9 : 0.98;
-        std::vector<glm::vec3> indirect, caustic;
-        const std::string splat_stage = std::string("splat (") + to_string(settings.method) + ")";
-        switch (settings.method) {
-            case SplatMethod::brute:
-            case SplatMethod::tiled:
-            case SplatMethod::gather: {
-                auto splat = [&](const PhotonMap& map) {
-                    if (settings.method == SplatMethod::brute) return splat_brute(samples, map, params, control, stats);
-                    if (settings.method == SplatMethod::tiled)
-                        return splat_tiled(samples, camera, map, params, control, stats);
-                    return splat_gather(samples, map, params, control, stats);
-                };
-                params.max_pairs_in_memory = fit_pair_cap(
-                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
-                                                                  photons.photons.size(), nullptr, camera,
-                                                                  settings.kernel, arena.max_concurrency()));
-                control.begin_stage(splat_stage, 0.45, splat_end);
-                StageTimer t(stats, "splat");
-                indirect = splat(photons);
-                if (settings.caustics_pass) {
-                    control.begin_stage("caustics pass", splat_end, 0.98);
-                    caustic = splat(caustic_photons);
-                }
-                break;
-            }
-            case SplatMethod::cluster:
-            case SplatMethod::cluster_cone:
-            case SplatMethod::directional: {
-                control.begin_stage("cluster hierarchy", 0.45, 0.5);
-                ClusterHierarchy hierarchy;
-                {
-                    StageTimer t(stats, "hierarchy_build");
-                    ClusterBuildOptions build_options;
-                    build_options.normal_cones = settings.method == SplatMethod::cluster_cone;
-                    build_options.leaf_summaries = settings.method == SplatMethod::directional;
-                    hierarchy = build_cluster_hierarchy(samples, ClusterKeyParams::from_camera(camera), build_options);
-                }
-                stats.bytes["hierarchy"] = static_cast<double>(hierarchy.bytes());
-                if (!hierarchy.leaf_summaries.empty())
-                    stats.bytes["leaf_summaries"] = static_cast<double>(hierarchy.summary_bytes());
-                stats.counters["hierarchy_nodes"] = static_cast<double>(hierarchy.nodes.size());
-                stats.counters["hierarchy_leaves"] = static_cast<double>(hierarchy.leaves.size());
-                control.check();
-                // Progressive passes: an explicit directional level would keep its blocks however small r gets, so
-                // once the leaves outgrow the radius the automatic rule takes over, and it splats exactly.
-                if (settings.method == SplatMethod::directional && pass.index > 0 && params.directional_level >= 0 &&
-                    directional_leaves_exceed_radius(hierarchy, radius))
-                    params.directional_level = -1;
-                auto splat = [&](const PhotonMap& map) {
-                    if (settings.method == SplatMethod::cluster)
-                        return splat_cluster(hierarchy, samples, map, params, control, stats);
-                    if (settings.method == SplatMethod::cluster_cone)
-                        return splat_cluster_cone(hierarchy, samples, map, params, control, stats);
-                    return splat_directional(hierarchy, samples, map, params, control, stats);
-                };
-                params.max_pairs_in_memory = fit_pair_cap(
-                    budget, settings.method, predict_splat_memory(settings.method, samples.samples.size(),
-                                                                  photons.photons.size(), &hierarchy, camera,
-                                                                  settings.kernel, arena.max_concurrency()));
-                control.begin_stage(splat_stage, 0.5, splat_end);
-                StageTimer t(stats, "splat");
-                indirect = splat(photons);
-                if (settings.caustics_pass) {
-                    control.begin_stage("caustics pass", splat_end, 0.98);
-                    caustic = splat(caustic_photons);
-                }
-                break;
+        // 3. The cluster hierarchy, if the method splats onto one.
+        const std::optional<ClusterHierarchy> hierarchy = build_hierarchy(*splatter, samples, camera, control, stats);
+
+        // 5–6. Splat.
+        SplatFrame frame{samples, camera, hierarchy ? &*hierarchy : nullptr, iteration.index, arena.max_concurrency()};
+        SplatParams params = splat_params(settings, iteration.radius, photons.emitted);
+        params.max_pairs_in_memory =
+            fit_pair_cap(budget, splatter->predict_memory(frame, photons.photons.size(), params));
+        const double splat_end = caustics_output ? 0.9 : 0.98;
+        control.begin_stage(std::string("splat (") + to_string(settings.method) + ")", hierarchy ? 0.5 : 0.45,
+                            splat_end);
+        SplatEstimate indirect, caustic;
+        {
+            StageTimer t(stats, "splat");
+            indirect = splatter->splat(frame, photons, params, control, stats);
+            if (caustics_output) {
+                control.begin_stage("caustic splat", splat_end, 0.98);
+                caustic = splatter->splat(frame, caustic_photons, params, control, stats);
             }
         }
         control.check();
-        // directional's blocks gather photons from around whole clusters, not a kernel ball per sample, so the
-        // correction is only for its exact fallback (applied to the blocks it lowered directional's SSIM on the
-        // atrium at 5 s from 0.916 to 0.899).
-        const bool kernel_estimate = settings.method != SplatMethod::directional ||
-                                     stats.values["directional_exact_fallback"] == 1.0;
-        if (settings.boundary_correction && kernel_estimate && !photons.photons.empty()) {
-            StageTimer t(stats, "kernel_coverage");
-            const std::vector<float> coverage = kernel_coverage(scene, samples, params, seed, control, stats);
-            for (size_t i = 0; i < coverage.size(); ++i) {
-                indirect[i] /= coverage[i];
-                if (settings.caustics_pass) caustic[i] /= coverage[i];
-            }
-        }
-        stats.bytes["indirect_light"] = static_cast<double>(indirect.capacity() * sizeof(glm::vec3));
+        result.kernel_estimate = indirect.kernel_estimate;
 
+        // 6½. Boundary correction of kernel estimates.
+        if (settings.boundary_correction && indirect.kernel_estimate && !photons.photons.empty()) {
+            std::vector<std::vector<glm::vec3>*> lights = {&indirect.radiance};
+            if (caustics_output) lights.push_back(&caustic.radiance);
+            correct_boundaries(scene, samples, params, seed, lights, control, stats);
+        }
+        stats.bytes["indirect_light"] = static_cast<double>(indirect.radiance.capacity() * sizeof(glm::vec3));
+
+        // 7. The film.
         control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");
-        result.width = width;
-        result.height = height;
-        result.rgba.assign(pixels * 4, 0.0f);
-        result.emission.assign(pixels * 3, 0.0f);
-        result.direct.assign(pixels * 3, 0.0f);
-        result.indirect.assign(pixels * 3, 0.0f);
-        if (settings.caustics_pass) result.caustics.assign(pixels * 3, 0.0f);
-        result.normal.assign(pixels * 3, 0.0f);
-        result.depth.assign(pixels, RenderResult::kNoDepth);
-        for (size_t p = 0; p < pixels; ++p) {
-            // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles):
-            // the background seen through glass or in mirrors stays.
-            const bool escaped = samples.alpha[p] == 0.0f;
-            if (!(settings.transparent && escaped))
-                for (int c = 0; c < 3; ++c) result.emission[3 * p + c] = samples.emission[p][c];
-            if (!escaped) {
-                for (int c = 0; c < 3; ++c) result.normal[3 * p + c] = samples.first_normal[p][c];
-                result.depth[p] = samples.first_depth[p];
-            }
-        }
-        for (size_t i = 0; i < samples.samples.size(); ++i) {
-            const size_t p = samples.samples[i].pixel;
-            for (int c = 0; c < 3; ++c) {  // a pixel's samples add up (view_samples.h)
-                result.direct[3 * p + c] += direct[i][c];
-                result.indirect[3 * p + c] += indirect[i][c];
-                if (settings.caustics_pass) result.caustics[3 * p + c] += caustic[i][c];
-            }
-        }
-        for (size_t p = 0; p < pixels; ++p) {
-            for (int c = 0; c < 3; ++c)
-                result.rgba[4 * p + c] = result.emission[3 * p + c] + result.direct[3 * p + c] + result.indirect[3 * p + c];
-            result.rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
-        }
+        result.film = develop_film(samples, direct, indirect.radiance, caustics_output ? &caustic.radiance : nullptr,
+                                   settings, stats);
         // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
         // float's range: say so rather than hand back a frame with infinities in it.
         size_t overflowed = 0;
-        for (float v : result.rgba) overflowed += std::isfinite(v) ? 0 : 1;
+        for (float v : result.rgba()) overflowed += std::isfinite(v) ? 0 : 1;
         if (overflowed > 0)
             throw InvalidInput("scene", std::to_string(overflowed) + " pixel values overflowed the float range; lower "
                                         "light strengths, emission or the background, or the scene's size");
-        stats.bytes["image"] = static_cast<double>((result.rgba.size() + 3 * result.emission.size() + result.caustics.size() +
-                                                    result.normal.size() + result.depth.size()) * sizeof(float));
     });
     control.begin_stage("done", 1.0, 1.0);
     return result;
@@ -250,10 +253,10 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings, RenderControl& control) {
     validate(settings);
     if (settings.iterations != 1) return render_progressive(scene, camera, settings, control);
-    IterationParams pass;
-    pass.radius = first_radius(scene, camera, settings);
-    RenderResult result = render_iteration(scene, camera, settings, pass, control);
-    result.stats.values["passes"] = 1.0;
+    IterationParams iteration;
+    iteration.radius = first_radius(scene, camera, settings);
+    RenderResult result = render_iteration(scene, camera, settings, iteration, control);
+    result.stats.values["iterations"] = 1.0;
     return result;
 }
 

@@ -41,8 +41,15 @@ void validate(const RenderSettings& s) {
             "0 (no pass limit) needs a time_limit > 0, else the render would never end", s.iterations);
     require(std::isfinite(s.aimed_photons) && s.aimed_photons >= 0.0f && s.aimed_photons <= 16.0f, "aimed_photons",
             "must be in [0, 16] (a fraction of photons; 0 = off)", s.aimed_photons);
+    require((s.outputs & ~kAllFilmOutputs) == 0, "outputs", "names an output that does not exist", s.outputs);
     require(std::isfinite(s.alpha) && s.alpha > 0.0f && s.alpha <= 1.0f, "alpha",
             "must be in (0, 1] (2/3 balances noise and blur; 1 keeps the radius fixed)", s.alpha);
+}
+
+FilmOutputSet requested_outputs(const RenderSettings& settings) {
+    FilmOutputSet outputs = (settings.outputs & kAllFilmOutputs) | film_bit(FilmOutput::combined);
+    if (settings.caustics_pass) outputs |= film_bit(FilmOutput::caustics);
+    return outputs;
 }
 
 }  // namespace ps

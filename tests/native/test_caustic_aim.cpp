@@ -207,7 +207,7 @@ TEST(CausticAim, ASceneWithoutMirrorsOrGlassRendersTheSameBits) {
     const RenderResult off = render(scene, test::cornell_camera(24, 24), settings, control);
     settings.aimed_photons = 0.5f;
     const RenderResult on = render(scene, test::cornell_camera(24, 24), settings, control);
-    EXPECT_EQ(off.rgba, on.rgba);
+    EXPECT_EQ(off.rgba(), on.rgba());
     EXPECT_EQ(on.stats.counters.count("aimed_photons_emitted"), 0u);
 }
 

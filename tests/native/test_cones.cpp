@@ -877,10 +877,10 @@ TEST(SplatClusterCone, RenderWithClusterConeEqualsBrute) {
         return render(scene, test::cornell_camera(32, 32), settings, control);
     };
     const RenderResult brute = render_with(SplatMethod::brute), cone = render_with(SplatMethod::cluster_cone);
-    ASSERT_EQ(brute.indirect.size(), cone.indirect.size());
+    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), cone.film[ps::FilmOutput::indirect].size());
     double sum = 0.0;
-    for (size_t i = 0; i < brute.indirect.size(); ++i) {
-        const float b = brute.indirect[i], c = cone.indirect[i];
+    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
+        const float b = brute.film[ps::FilmOutput::indirect][i], c = cone.film[ps::FilmOutput::indirect][i];
         EXPECT_LE(std::fabs(b - c), 1e-4f * std::max(std::fabs(b), 1e-6f)) << "component " << i;
         sum += b;
     }
@@ -906,7 +906,7 @@ TEST(SplatClusterCone, RenderIsBitIdenticalForAnyThreadCount) {
     };
     const RenderResult one = render_with(1);
     EXPECT_GT(one.stats.counters.at("node_accepts"), 100.0);
-    for (int threads : {2, 8}) EXPECT_EQ(one.rgba, render_with(threads).rgba) << threads << " threads";
+    for (int threads : {2, 8}) EXPECT_EQ(one.rgba(), render_with(threads).rgba()) << threads << " threads";
 }
 
 }  // namespace

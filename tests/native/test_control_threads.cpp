@@ -45,7 +45,7 @@ TEST(ControlAcrossThreads, ProgressIsReadWhileEveryMethodRenders) {
         }
         worker.join();
         EXPECT_GT(polls, 0);
-        EXPECT_EQ(result.rgba.size(), size_t(24 * 24 * 4)) << name;
+        EXPECT_EQ(result.rgba().size(), size_t(24 * 24 * 4)) << name;
     }
 }
 

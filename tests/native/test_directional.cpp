@@ -241,16 +241,16 @@ TEST(Directional, CornellBoxStaysCloseToBrute) {
     const float r = 0.3f;  // a leaf (8×8 of 64² pixels) is about as wide as r
     const RenderResult exact = render_cornell(SplatMethod::brute, -1, r);
     double exact_sum = 0.0;
-    for (float v : exact.indirect) exact_sum += v;
+    for (float v : exact.film[ps::FilmOutput::indirect]) exact_sum += v;
     ASSERT_GT(exact_sum, 0.0);
     for (int level : {0, 1, -1}) {
         const RenderResult approx = render_cornell(SplatMethod::directional, level, r);
         double sum = 0.0, difference = 0.0;
-        for (size_t i = 0; i < approx.indirect.size(); ++i) {
-            const float v = approx.indirect[i];
+        for (size_t i = 0; i < approx.film[ps::FilmOutput::indirect].size(); ++i) {
+            const float v = approx.film[ps::FilmOutput::indirect][i];
             ASSERT_TRUE(std::isfinite(v) && v >= 0.0f) << "component " << i << " = " << v;
             sum += v;
-            difference += std::fabs(v - exact.indirect[i]);
+            difference += std::fabs(v - exact.film[ps::FilmOutput::indirect][i]);
         }
         std::printf("Cornell box 64², r = %.2f, level %d (used %g): mean indirect / brute's = %.4f, "
                     "Σ|difference| / Σ brute = %.4f\n",
@@ -265,9 +265,9 @@ TEST(Directional, AutoLevelFallsBackToExactWhenLeavesAreMuchLargerThanR) {
     const RenderResult exact = render_cornell(SplatMethod::brute, -1, 0.05f, 48);
     const RenderResult approx = render_cornell(SplatMethod::directional, -1, 0.05f, 48);
     EXPECT_EQ(approx.stats.values.at("directional_exact_fallback"), 1.0);
-    ASSERT_EQ(exact.indirect.size(), approx.indirect.size());
-    for (size_t i = 0; i < exact.indirect.size(); ++i)
-        EXPECT_NEAR(approx.indirect[i], exact.indirect[i], 1e-4f * std::fabs(exact.indirect[i]) + 1e-9f);
+    ASSERT_EQ(exact.film[ps::FilmOutput::indirect].size(), approx.film[ps::FilmOutput::indirect].size());
+    for (size_t i = 0; i < exact.film[ps::FilmOutput::indirect].size(); ++i)
+        EXPECT_NEAR(approx.film[ps::FilmOutput::indirect][i], exact.film[ps::FilmOutput::indirect][i], 1e-4f * std::fabs(exact.film[ps::FilmOutput::indirect][i]) + 1e-9f);
 }
 
 ViewSamples random_planes_view(std::mt19937& rng, int width, int height) {

@@ -105,10 +105,10 @@ TEST(EmissionGuide, SkylitRoomStoresManyMorePhotonsForTheSameImage) {
     const double stored_plain = plain.stats.counters.at("photons_stored");
     const double stored_guided = guided.stats.counters.at("photons_stored");
     double sum_plain = 0.0, sum_guided = 0.0;
-    for (size_t i = 0; i < plain.indirect.size(); ++i) {
-        ASSERT_TRUE(std::isfinite(guided.indirect[i]));
-        sum_plain += plain.indirect[i];
-        sum_guided += guided.indirect[i];
+    for (size_t i = 0; i < plain.film[ps::FilmOutput::indirect].size(); ++i) {
+        ASSERT_TRUE(std::isfinite(guided.film[ps::FilmOutput::indirect][i]));
+        sum_plain += plain.film[ps::FilmOutput::indirect][i];
+        sum_guided += guided.film[ps::FilmOutput::indirect][i];
     }
     std::printf("skylit room, %llu photons: stored %.0f unguided, %.0f guided (%.1f×); mean indirect guided / "
                 "unguided = %.4f\n",

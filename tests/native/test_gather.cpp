@@ -544,10 +544,10 @@ TEST(GatherSplat, CornellBoxRenderEqualsBrute) {
     };
     const RenderResult brute = render_with(SplatMethod::brute);
     const RenderResult gather = render_with(SplatMethod::gather);
-    ASSERT_EQ(brute.indirect.size(), gather.indirect.size());
+    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), gather.film[ps::FilmOutput::indirect].size());
     double sum = 0.0;
-    for (size_t i = 0; i < brute.indirect.size(); ++i) {
-        const float b = brute.indirect[i], g = gather.indirect[i];
+    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
+        const float b = brute.film[ps::FilmOutput::indirect][i], g = gather.film[ps::FilmOutput::indirect][i];
         EXPECT_LE(std::fabs(b - g), 1e-4f * std::max(std::fabs(b), 1e-6f)) << "component " << i;
         sum += b;
     }

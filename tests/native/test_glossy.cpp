@@ -474,13 +474,13 @@ RenderResult render_glossy(SplatMethod method, int size = 64) {
 
 TEST(GlossyRender, ExactMethodsEqualBruteWithGlossyReceivers) {
     const RenderResult brute = render_glossy(SplatMethod::brute);
-    for (float v : brute.indirect) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : brute.film[ps::FilmOutput::indirect]) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
     for (SplatMethod method : {SplatMethod::cluster, SplatMethod::tiled, SplatMethod::cluster_cone, SplatMethod::gather}) {
         const RenderResult other = render_glossy(method);
-        ASSERT_EQ(brute.indirect.size(), other.indirect.size());
+        ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), other.film[ps::FilmOutput::indirect].size());
         size_t mismatches = 0;
-        for (size_t i = 0; i < brute.indirect.size(); ++i) {
-            const float b = brute.indirect[i], c = other.indirect[i];
+        for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
+            const float b = brute.film[ps::FilmOutput::indirect][i], c = other.film[ps::FilmOutput::indirect][i];
             if (!(std::fabs(b - c) <= 1e-4f * std::max(std::fabs(b), 1e-6f)) && ++mismatches <= 5)
                 ADD_FAILURE() << to_string(method) << ", component " << i << ": " << c << " vs brute " << b;
         }
@@ -500,7 +500,7 @@ TEST(GlossyRender, ExactMethodsEqualBruteWithGlossyReceivers) {
         if (!(s.flags & kGlossy)) continue;
         ++glossy;
         via_glass += (s.flags & kViaSpecular) ? 1 : 0;
-        glossy_indirect += brute.indirect[3 * s.pixel] + brute.indirect[3 * s.pixel + 1];
+        glossy_indirect += brute.film[ps::FilmOutput::indirect][3 * s.pixel] + brute.film[ps::FilmOutput::indirect][3 * s.pixel + 1];
     }
     EXPECT_GT(glossy, 1000u);
     EXPECT_GT(via_glass, 10u) << "glossy samples seen through the glass ball";
@@ -565,9 +565,9 @@ TEST(GlossyRender, GlossySphereRowRendersFiniteAndNonNegative) {
     RenderControl control;
     const Camera camera = test::look_at({0, -6, 2}, {0, 0, 0.5f}, 128, 64, 35.0f);
     const RenderResult r = render(scene, camera, settings, control);
-    for (float v : r.rgba) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
-    for (float v : r.indirect) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
-    for (float v : r.direct) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : r.rgba()) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : r.film[ps::FilmOutput::indirect]) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
+    for (float v : r.film[ps::FilmOutput::direct]) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
     Stats stats;
     const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
     size_t glossy = 0;
@@ -575,8 +575,8 @@ TEST(GlossyRender, GlossySphereRowRendersFiniteAndNonNegative) {
     for (const ViewSample& s : samples.samples) {
         if (!(s.flags & kGlossy)) continue;
         ++glossy;
-        glossy_direct += r.direct[3 * s.pixel];
-        glossy_indirect += r.indirect[3 * s.pixel];
+        glossy_direct += r.film[ps::FilmOutput::direct][3 * s.pixel];
+        glossy_indirect += r.film[ps::FilmOutput::indirect][3 * s.pixel];
     }
     EXPECT_GT(glossy, 400u) << "four rough spheres are view samples (the smoothest one is a mirror)";
     EXPECT_GT(glossy_direct, 0.0);

@@ -59,20 +59,20 @@ std::map<SplatMethod, RenderResult> render_every_method(const Scene& scene, cons
     std::map<SplatMethod, RenderResult> results;
     for (SplatMethod method : all_methods()) results[method] = render_with(scene, camera, settings, method);
     const RenderResult& brute = results.at(SplatMethod::brute);
-    const float largest = brute.indirect.empty() ? 0.0f : *std::max_element(brute.indirect.begin(), brute.indirect.end());
+    const float largest = brute.film[ps::FilmOutput::indirect].empty() ? 0.0f : *std::max_element(brute.film[ps::FilmOutput::indirect].begin(), brute.film[ps::FilmOutput::indirect].end());
     for (const auto& [method, r] : results) {
         SCOPED_TRACE(label + ", method " + to_string(method));
-        EXPECT_TRUE(all_finite(r.rgba));
-        EXPECT_TRUE(all_finite(r.indirect));
-        EXPECT_EQ(r.indirect.size(), brute.indirect.size());
-        if (r.indirect.size() != brute.indirect.size()) continue;
+        EXPECT_TRUE(all_finite(r.rgba()));
+        EXPECT_TRUE(all_finite(r.film[ps::FilmOutput::indirect]));
+        EXPECT_EQ(r.film[ps::FilmOutput::indirect].size(), brute.film[ps::FilmOutput::indirect].size());
+        if (r.film[ps::FilmOutput::indirect].size() != brute.film[ps::FilmOutput::indirect].size()) continue;
         if (method == SplatMethod::directional) {
-            EXPECT_NEAR(total(r.indirect), total(brute.indirect), directional_tolerance * total(brute.indirect) + 1e-9);
+            EXPECT_NEAR(total(r.film[ps::FilmOutput::indirect]), total(brute.film[ps::FilmOutput::indirect]), directional_tolerance * total(brute.film[ps::FilmOutput::indirect]) + 1e-9);
             continue;
         }
         size_t bad = 0;
-        for (size_t i = 0; i < r.indirect.size(); ++i) {
-            const float b = brute.indirect[i], m = r.indirect[i];
+        for (size_t i = 0; i < r.film[ps::FilmOutput::indirect].size(); ++i) {
+            const float b = brute.film[ps::FilmOutput::indirect][i], m = r.film[ps::FilmOutput::indirect][i];
             if (!(std::fabs(b - m) <= 1e-4f * std::fabs(b) + 1e-6f * largest)) ++bad;
         }
         EXPECT_EQ(bad, 0u) << "components differing from brute";
@@ -109,7 +109,7 @@ TEST(HardCases, GrazingLightAndSamplesMatchTheAnalyticDirectLight) {
         const glm::vec3 to_light = lamp - x;
         const float d2 = glm::dot(to_light, to_light);
         const double expected = albedo / kPi * (100.0 / (4.0 * kPi)) * (to_light.z / std::sqrt(d2)) / d2;
-        const double got = r.direct[3 * s.pixel + 1];
+        const double got = r.film[ps::FilmOutput::direct][3 * s.pixel + 1];
         worst = std::max(worst, std::fabs(got - expected) / expected);
         ++checked;
     }
@@ -143,8 +143,8 @@ struct ThinWall {
             if (!(s.normal.x > 0.99f) || std::fabs(s.position.x + samples.origin.x - 0.0005f) > 1e-4f) continue;
             ++seen;
             for (int c = 0; c < 3; ++c) {
-                indirect = std::max(indirect, r.indirect[3 * s.pixel + c]);
-                direct = std::max(direct, r.direct[3 * s.pixel + c]);
+                indirect = std::max(indirect, r.film[ps::FilmOutput::indirect][3 * s.pixel + c]);
+                direct = std::max(direct, r.film[ps::FilmOutput::direct][3 * s.pixel + c]);
             }
         }
         EXPECT_GT(seen, 200) << "the camera must see the dark face";
@@ -160,7 +160,7 @@ TEST(HardCases, OneMillimetreWallLetsNoLightThroughAndEachLeakTestMatters) {
     for (SplatMethod method : all_methods()) {
         SCOPED_TRACE(to_string(method));
         const RenderResult tight = render_with(wall.scene, wall.camera, settings, method);
-        EXPECT_GT(total(tight.indirect), 0.0) << "the floor in view near the wall is lit: the test is not vacuous";
+        EXPECT_GT(total(tight.film[ps::FilmOutput::indirect]), 0.0) << "the floor in view near the wall is lit: the test is not vacuous";
         const auto [indirect, direct] = wall.dark_face(tight);
         EXPECT_EQ(direct, 0.0f) << "direct light through the wall";
         EXPECT_EQ(indirect, 0.0f) << "photon light leaked through the wall";
@@ -192,12 +192,12 @@ TEST(HardCases, StackedSurfacesOneMillimetreApartNeedThePlaneDistanceTest) {
         const RenderResult inside = render_with(scene, camera, settings, method);
         EXPECT_GT(inside.stats.counters.at("view_samples"), 200.0) << "the camera sees the cavity floor";
         EXPECT_GT(inside.stats.counters.at("photons_stored"), 1000.0) << "the lid is lit: the test is not vacuous";
-        EXPECT_EQ(*std::max_element(inside.rgba.begin(), inside.rgba.end() - 1), 1.0f) << "alpha only";
-        for (size_t i = 0; i < inside.indirect.size(); ++i) ASSERT_EQ(inside.indirect[i], 0.0f) << "leak at " << i;
+        EXPECT_EQ(*std::max_element(inside.rgba().begin(), inside.rgba().end() - 1), 1.0f) << "alpha only";
+        for (size_t i = 0; i < inside.film[ps::FilmOutput::indirect].size(); ++i) ASSERT_EQ(inside.film[ps::FilmOutput::indirect][i], 0.0f) << "leak at " << i;
         RenderSettings no_plane_test = settings;
         no_plane_test.plane_distance = 0.0f;
         const RenderResult leaky = render_with(scene, camera, no_plane_test, method);
-        EXPECT_GT(total(leaky.indirect), 0.0) << "without the plane-distance test the lid's light must leak in";
+        EXPECT_GT(total(leaky.film[ps::FilmOutput::indirect]), 0.0) << "without the plane-distance test the lid's light must leak in";
     }
 }
 
@@ -220,7 +220,7 @@ TEST(HardCases, CornerOfAClosedEmissiveBoxStaysNearTheAnalyticRadiance) {
     const auto results = render_every_method(scene, camera, settings, "corner");
     for (const auto& [method, r] : results) {
         double mean = 0.0;
-        for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba[4 * p + 1];
+        for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba()[4 * p + 1];
         mean /= 16 * 16;
         EXPECT_NEAR(mean, le / (1.0f - albedo), 0.05 * le / (1.0f - albedo)) << to_string(method);
     }
@@ -252,13 +252,13 @@ double mean_abs_relative(const std::vector<float>& a, const std::vector<float>& 
 
 ImageDifference compare(const RenderResult& a, const RenderResult& b) {
     ImageDifference d;
-    d.direct = mean_abs_relative(a.direct, b.direct);
-    d.indirect_total = std::fabs(total(a.indirect) - total(b.indirect)) / total(a.indirect);
-    d.image = mean_abs_relative(a.rgba, b.rgba);
+    d.direct = mean_abs_relative(a.film[ps::FilmOutput::direct], b.film[ps::FilmOutput::direct]);
+    d.indirect_total = std::fabs(total(a.film[ps::FilmOutput::indirect]) - total(b.film[ps::FilmOutput::indirect])) / total(a.film[ps::FilmOutput::indirect]);
+    d.image = mean_abs_relative(a.rgba(), b.rgba());
     return d;
 }
 
-double relative_image_difference(const RenderResult& a, const RenderResult& b) { return mean_abs_relative(a.rgba, b.rgba); }
+double relative_image_difference(const RenderResult& a, const RenderResult& b) { return mean_abs_relative(a.rgba(), b.rgba()); }
 
 RenderResult render_transformed(float scale, glm::vec3 offset, SplatMethod method, bool boundary_correction = true) {
     Scene scene;
@@ -347,8 +347,8 @@ TEST(HardCases, ProgressiveAndReferenceRenderMovedScenesAlikeAndTheOriginFollows
     RenderControl control;
     const RenderResult a = render(at_origin, test::moved_cornell_camera(glm::dvec3(0.0), 16, 16), settings, control);
     const RenderResult b = render(moved, test::moved_cornell_camera(far, 16, 16), settings, control);
-    EXPECT_LT(mean_abs_relative(a.direct, b.direct), 1e-3);
-    EXPECT_LT(mean_abs_relative(a.rgba, b.rgba), 1e-2);
+    EXPECT_LT(mean_abs_relative(a.film[ps::FilmOutput::direct], b.film[ps::FilmOutput::direct]), 1e-3);
+    EXPECT_LT(mean_abs_relative(a.rgba(), b.rgba()), 1e-2);
 
     ReferenceSettings reference;
     reference.samples = 2;
@@ -399,8 +399,8 @@ TEST(HardCases, InstancesEmbreeCannotTraceAreDroppedAndFarRaysStartAtTheScene) {
     settings.transparent = true;  // alpha says whether the camera ray hit the box
     for (SplatMethod method : all_methods()) {
         const RenderResult r = render_with(scene, far, settings, method);
-        EXPECT_TRUE(all_finite(r.rgba)) << to_string(method);
-        EXPECT_EQ(r.rgba[3], 1.0f) << to_string(method);
+        EXPECT_TRUE(all_finite(r.rgba())) << to_string(method);
+        EXPECT_EQ(r.rgba()[3], 1.0f) << to_string(method);
     }
 }
 
@@ -425,7 +425,7 @@ TEST(HardCases, InstancesMovedFarInPlaceRenderAsAFreshSceneAfterFitOrigin) {
     EXPECT_EQ(in_place.origin(), fresh.origin());
     for (SplatMethod method : all_methods()) {
         const RenderResult a = render_with(in_place, camera, settings, method), b = render_with(fresh, camera, settings, method);
-        EXPECT_EQ(a.rgba, b.rgba) << to_string(method);
+        EXPECT_EQ(a.rgba(), b.rgba()) << to_string(method);
     }
 }
 
@@ -542,7 +542,7 @@ TEST(HardCases, EmptySceneNoLightsZeroPowerLightsAndALightShutInABox) {
             SCOPED_TRACE(std::string(name) + ", " + to_string(method));
             const RenderResult r = render_with(*scene, camera, settings, method);
             for (size_t p = 0; p < 64; ++p)
-                for (int c = 0; c < 3; ++c) ASSERT_EQ(r.rgba[4 * p + c], expected[c]) << "pixel " << p;
+                for (int c = 0; c < 3; ++c) ASSERT_EQ(r.rgba()[4 * p + c], expected[c]) << "pixel " << p;
         }
     }
     // The crate's photons exist (the lamp is not simply off): they stay inside.
@@ -562,7 +562,7 @@ TEST(HardCases, CameraInsideClosedGeometry) {
     for (SplatMethod method : all_methods()) {
         const RenderResult r = render_with(scene, camera, settings, method);
         for (size_t p = 0; p < 64; ++p)
-            for (int c = 0; c < 3; ++c) ASSERT_EQ(r.rgba[4 * p + c], 0.0f) << to_string(method);
+            for (int c = 0; c < 3; ++c) ASSERT_EQ(r.rgba()[4 * p + c], 0.0f) << to_string(method);
     }
 }
 
@@ -583,7 +583,7 @@ TEST(HardCases, OrthographicCamera) {
     RenderSettings settings;
     settings.photons = 20000;
     const auto results = render_every_method(scene, camera, settings, "orthographic");
-    EXPECT_GT(total(results.at(SplatMethod::brute).indirect), 0.0);
+    EXPECT_GT(total(results.at(SplatMethod::brute).film[ps::FilmOutput::indirect]), 0.0);
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -608,10 +608,10 @@ TEST(HardCases, ExtremeRadiiPhotonCountsAndResolution) {
         const auto results = render_every_method(scene, test::cornell_camera(c.size, c.size), settings, c.name,
                                                  c.radius > 10.0f ? 1.5 : 0.1);
         if (c.photons == 0)
-            for (const auto& [method, r] : results) EXPECT_EQ(total(r.indirect), 0.0) << c.name;
+            for (const auto& [method, r] : results) EXPECT_EQ(total(r.film[ps::FilmOutput::indirect]), 0.0) << c.name;
         if (c.radius == 1e3f) {
             // Every photon reaches every sample facing it: the estimate is tiny but finite and positive.
-            EXPECT_GT(total(results.at(SplatMethod::brute).indirect), 0.0);
+            EXPECT_GT(total(results.at(SplatMethod::brute).film[ps::FilmOutput::indirect]), 0.0);
         }
     }
 }
@@ -750,7 +750,7 @@ TEST(HardCases, BitIdenticalImagesWithOneTwoAndEightThreadsForEveryMethod) {
         for (int threads : {2, 8}) {
             settings.threads = threads;
             const RenderResult many = render_with(scene, test::cornell_camera(32, 32), settings, method);
-            ASSERT_EQ(one.rgba, many.rgba) << to_string(method) << " with " << threads << " threads";
+            ASSERT_EQ(one.rgba(), many.rgba()) << to_string(method) << " with " << threads << " threads";
         }
     }
 }

@@ -81,9 +81,9 @@ TEST(MemoryBudget, TightBudgetLowersThePairCapAndKeepsTheImage) {
     const RenderResult tight = render(scene, test::cornell_camera(48, 48), settings, control);
     EXPECT_GT(tight.stats.counters.at("splat_batches"), roomy.stats.counters.at("splat_batches"));
     EXPECT_LE(tight.stats.bytes.at("leaf_photon_lists"), tight.stats.predicted_bytes.at("leaf_photon_lists"));
-    ASSERT_EQ(roomy.indirect.size(), tight.indirect.size());
-    for (size_t i = 0; i < roomy.indirect.size(); ++i)
-        EXPECT_NEAR(roomy.indirect[i], tight.indirect[i], 1e-4f * std::fabs(roomy.indirect[i]) + 1e-7f);
+    ASSERT_EQ(roomy.film[ps::FilmOutput::indirect].size(), tight.film[ps::FilmOutput::indirect].size());
+    for (size_t i = 0; i < roomy.film[ps::FilmOutput::indirect].size(); ++i)
+        EXPECT_NEAR(roomy.film[ps::FilmOutput::indirect][i], tight.film[ps::FilmOutput::indirect][i], 1e-4f * std::fabs(roomy.film[ps::FilmOutput::indirect][i]) + 1e-7f);
 }
 
 TEST(MemoryBudget, DefaultIsThreeQuartersOfAvailableMemory) {

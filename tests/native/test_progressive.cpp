@@ -43,12 +43,12 @@ TEST(Progressive, OnePassIsTheOneShotRenderBitForBit) {
     ProgressiveRender progressive(cornell(), camera, settings);
     progressive.run_iteration(control);
     const RenderResult mean = progressive.result();
-    ASSERT_EQ(one_shot.rgba.size(), 32u * 24u * 4u);
-    EXPECT_EQ(one_shot.rgba, rendered.rgba);
-    EXPECT_EQ(one_shot.rgba, mean.rgba);
-    EXPECT_EQ(one_shot.indirect, mean.indirect);
-    EXPECT_EQ(one_shot.direct, mean.direct);
-    EXPECT_EQ(mean.stats.values.at("passes"), 1.0);
+    ASSERT_EQ(one_shot.rgba().size(), 32u * 24u * 4u);
+    EXPECT_EQ(one_shot.rgba(), rendered.rgba());
+    EXPECT_EQ(one_shot.rgba(), mean.rgba());
+    EXPECT_EQ(one_shot.film[ps::FilmOutput::indirect], mean.film[ps::FilmOutput::indirect]);
+    EXPECT_EQ(one_shot.film[ps::FilmOutput::direct], mean.film[ps::FilmOutput::direct]);
+    EXPECT_EQ(mean.stats.values.at("iterations"), 1.0);
 }
 
 TEST(Progressive, RadiusShrinksAsKnausZwickerAndPassesDiffer) {

@@ -35,10 +35,10 @@ RenderResult render_cornell(SplatMethod method, int threads, uint64_t photons = 
 TEST(Render, ClusterEqualsBruteOnTheCornellBox) {
     const RenderResult brute = render_cornell(SplatMethod::brute, 0);
     const RenderResult cluster = render_cornell(SplatMethod::cluster, 0);
-    ASSERT_EQ(brute.indirect.size(), cluster.indirect.size());
+    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), cluster.film[ps::FilmOutput::indirect].size());
     double indirect_sum = 0.0;
-    for (size_t i = 0; i < brute.indirect.size(); ++i) {
-        const float b = brute.indirect[i], c = cluster.indirect[i];
+    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
+        const float b = brute.film[ps::FilmOutput::indirect][i], c = cluster.film[ps::FilmOutput::indirect][i];
         EXPECT_LE(std::fabs(b - c), 1e-4f * std::max(std::fabs(b), 1e-6f)) << "component " << i;
         indirect_sum += b;
     }
@@ -54,7 +54,7 @@ TEST(Render, ImageIsBitIdenticalForAnyThreadCount) {
         const RenderResult one = render_cornell(method, 1, 5000, 32);
         for (int threads : {2, 8}) {
             const RenderResult many = render_cornell(method, threads, 5000, 32);
-            ASSERT_EQ(one.rgba, many.rgba) << to_string(method) << " with " << threads << " threads";
+            ASSERT_EQ(one.rgba(), many.rgba()) << to_string(method) << " with " << threads << " threads";
         }
     }
 }
@@ -79,7 +79,7 @@ TEST(Render, CausticUnderAFloatingGlassSphereIsBrighterThanTheFloorAround) {
         const glm::vec3 x = s.position + samples.origin;
         if (std::fabs(x.z) > 1e-3f) continue;  // floor only
         const float d = std::hypot(x.x, x.y);
-        const float v = luminance(glm::vec3(r.indirect[3 * s.pixel], r.indirect[3 * s.pixel + 1], r.indirect[3 * s.pixel + 2]));
+        const float v = luminance(glm::vec3(r.film[ps::FilmOutput::indirect][3 * s.pixel], r.film[ps::FilmOutput::indirect][3 * s.pixel + 1], r.film[ps::FilmOutput::indirect][3 * s.pixel + 2]));
         if (d < 0.08f) spot += v, ++n_spot;
         if (d > 0.45f && d < 0.7f) ring += v, ++n_ring;
     }
@@ -115,14 +115,14 @@ TEST(Render, EmptySceneAndNoLightsGiveFiniteImagesOfTheBackground) {
     RenderControl control;
     const RenderResult r = render(empty, test::cornell_camera(8, 8), RenderSettings{}, control);
     for (size_t p = 0; p < 64; ++p) {
-        EXPECT_FLOAT_EQ(r.rgba[4 * p + 0], 0.1f);
-        EXPECT_FLOAT_EQ(r.rgba[4 * p + 2], 0.3f);
+        EXPECT_FLOAT_EQ(r.rgba()[4 * p + 0], 0.1f);
+        EXPECT_FLOAT_EQ(r.rgba()[4 * p + 2], 0.3f);
     }
     Scene unlit;
     unlit.add_material({"white", MaterialKind::diffuse, glm::vec3(0.8f), 1.45f, glm::vec3(0.0f)});
     test::add_quad(unlit, "floor", {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, 0);
     const RenderResult u = render(unlit, test::cornell_camera(8, 8), RenderSettings{}, control);
-    for (float v : u.rgba) EXPECT_TRUE(std::isfinite(v));
+    for (float v : u.rgba()) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(Render, SettingsAreValidatedNamingTheField) {
@@ -170,7 +170,7 @@ TEST(Render, ClosedEmissiveBoxReachesLeOverOneMinusAlbedo) {
     RenderControl control;
     const RenderResult r = render(scene, camera, settings, control);
     double mean = 0.0;
-    for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba[4 * p + 1];
+    for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba()[4 * p + 1];
     mean /= 16 * 16;
     EXPECT_NEAR(mean, le / (1.0f - albedo), 0.03 * le / (1.0f - albedo));
 }

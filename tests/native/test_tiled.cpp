@@ -289,14 +289,14 @@ TEST(Tiled, RenderWithTheTiledMethodEqualsBrute) {
     };
     const RenderResult brute = render_with(SplatMethod::brute, 0);
     const RenderResult tiled = render_with(SplatMethod::tiled, 1);
-    ASSERT_EQ(brute.indirect.size(), tiled.indirect.size());
+    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), tiled.film[ps::FilmOutput::indirect].size());
     double sum = 0.0;
-    for (size_t i = 0; i < brute.indirect.size(); ++i) {
-        EXPECT_LE(std::fabs(brute.indirect[i] - tiled.indirect[i]), 1e-4f * std::fabs(brute.indirect[i])) << i;
-        sum += brute.indirect[i];
+    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
+        EXPECT_LE(std::fabs(brute.film[ps::FilmOutput::indirect][i] - tiled.film[ps::FilmOutput::indirect][i]), 1e-4f * std::fabs(brute.film[ps::FilmOutput::indirect][i])) << i;
+        sum += brute.film[ps::FilmOutput::indirect][i];
     }
     EXPECT_GT(sum, 0.0);
-    EXPECT_EQ(render_with(SplatMethod::tiled, 2).rgba, tiled.rgba);
+    EXPECT_EQ(render_with(SplatMethod::tiled, 2).rgba(), tiled.rgba());
     EXPECT_GT(tiled.stats.seconds.count("splat_binning"), 0u);
     EXPECT_GT(tiled.stats.bytes.count("tile_bounds"), 0u);
 }

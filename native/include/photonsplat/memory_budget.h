@@ -7,7 +7,8 @@
 #include <map>
 #include <string>
 
-#include "photonsplat/splat.h"
+#include "photonsplat/film.h"
+#include "photonsplat/splatter.h"
 
 namespace ps {
 
@@ -68,12 +69,12 @@ void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSe
 // View samples, one a pixel, with the per-pixel emission, alpha and first hit, and the scratch of their stage.
 double predict_view_sample_bytes(int width, int height);
 double predict_view_sample_scratch_bytes(int width, int height);
-// Direct light and splatted indirect light per view sample, and the frame's RGBA + three component buffers.
+// Direct light and splatted indirect light per view sample; the film of these outputs with its scratch images.
 double predict_per_sample_light_bytes(size_t samples);
 // The boundary correction's coverage of each view sample (kernel_coverage.h); reserve_frame adds its index of
 // each pixel's first sample.
 double predict_kernel_coverage_bytes(size_t samples);
-double predict_image_bytes(int width, int height, bool caustics_pass);
+double predict_image_bytes(int width, int height, FilmOutputSet outputs);
 // Embree's geometry buffers (the BVH itself lives in Embree and is not counted).
 double predict_embree_bytes(const Scene& scene);
 // The photon map: `emitted` paths × the expected number of stored photons per path, which Russian roulette bounds
@@ -86,21 +87,9 @@ double predict_hierarchy_bytes(size_t samples);
 double predict_leaf_summary_bytes(size_t samples);  // directional: one summary per leaf
 double predict_cone_bytes(size_t samples);
 
-// The structures of one splat method, known once the view samples, photons and (for the hierarchy methods) the
-// hierarchy exist. Pair lists (cluster, cluster_cone, tiled) are bounded by params.max_pairs_in_memory, which
-// fit_pair_cap() chooses so that they fit.
-struct SplatMemory {
-    std::map<std::string, double> fixed;  // Stats::bytes key → bytes of structures whose size is known
-    std::string pair_key;                 // Stats::bytes key of the pair lists; empty for methods without pairs
-    double pair_fixed = 0.0;              // the pair lists' bookkeeping (offsets, counts)
-    double per_pair = 0.0;                // bytes per (leaf or tile, photon) pair at the peak
-};
-SplatMemory predict_splat_memory(SplatMethod method, size_t samples, size_t photons, const ClusterHierarchy* hierarchy,
-                                 const Camera& camera, Kernel kernel, int threads);
-
 // Reserves the method's structures and returns the pair cap to use: the default cap, lowered so that the pair
 // lists fit in what the budget has left. Refuses (naming `radius` and `resolution`) when not even a minimal cap
 // fits.
-uint64_t fit_pair_cap(MemoryBudget& budget, SplatMethod method, const SplatMemory& memory);
+uint64_t fit_pair_cap(MemoryBudget& budget, const SplatMemory& memory);
 
 }  // namespace ps

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "photonsplat/camera.h"
+#include "photonsplat/film.h"
 #include "photonsplat/render.h"
 
 namespace ps {
@@ -62,19 +63,20 @@ private:
     const Scene& scene_;
     Camera camera_;
     RenderSettings settings_;
-    size_t pixels_;
     std::atomic<bool> running_{false};
+
+    bool exact_method_;          // the registry's word on settings.method (splatter.h)
 
     mutable std::mutex mutex_;  // guards everything below
     uint32_t iterations_done_ = 0;
-    double radius_sq_;          // of the next pass
+    double radius_sq_;          // of the next iteration
     float last_radius_;
     float first_radius_;
     double elapsed_ = 0.0;
-    uint32_t directional_exact_passes_ = 0, directional_exact_from_pass_ = 0;
-    std::vector<double> rgba_sum_, emission_sum_, direct_sum_, indirect_sum_;
-    std::vector<double> caustics_sum_;         // only with settings.caustics_pass
-    std::vector<float> normal_, depth_;        // of pass 0 (pixel-centred rays), as Cycles keeps its first sample's
+    // Iterations whose splat was a kernel estimate, and the first of them (1-based, 0 = none): for an approximate
+    // method, where it gave way to the exact splat.
+    uint32_t kernel_estimate_iterations_ = 0, first_kernel_estimate_iteration_ = 0;
+    FilmAccumulator film_;      // the running sums of the requested outputs
     Stats stats_;
 };
 

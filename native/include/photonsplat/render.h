@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "photonsplat/camera.h"
+#include "photonsplat/film.h"
 #include "photonsplat/kernel_radius.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/settings.h"
@@ -16,44 +17,42 @@ class Scene;
 
 
 struct RenderResult {
-    int width = 0, height = 0;
-    std::vector<float> rgba;   // height × width × 4, linear radiance, row 0 = TOP of the image
-    // Per-pixel components, height × width × 3 each; rgba = emission + direct + indirect.
-    std::vector<float> emission, direct, indirect;
-    // The part of `indirect` carried by caustic photons (height × width × 3); empty unless settings.caustics_pass.
-    std::vector<float> caustics;
-    // First camera hit, as Cycles' passes: world-space normal (height × width × 3, 0 where nothing was hit) and
-    // depth along the camera axis (height × width, kNoDepth where nothing was hit).
-    std::vector<float> normal, depth;
-    static constexpr float kNoDepth = 1e10f;  // Cycles' depth of the background
+    Film film;  // the outputs the settings asked for (requested_outputs); linear radiance, row 0 = TOP
+    // The iteration's splat was a kernel estimate per view sample (splatter.h); false when an approximate method
+    // used its own blocks. A progressive render counts these iterations.
+    bool kernel_estimate = true;
     Stats stats;
+
+    int width() const { return film.width(); }
+    int height() const { return film.height(); }
+    // The combined image, height × width × 4: emission + direct + indirect, and alpha.
+    const std::vector<float>& rgba() const { return film[FilmOutput::combined]; }
 };
 
-// Which pass of a progressive render is being rendered, and with what radius. Pass 0 keeps settings.seed and
-// pixel-centred camera rays, so a one-pass render is the paper's one-shot image; later passes draw from their
-// own random streams (iteration_seed) and jitter each camera ray inside its pixel.
+// Which iteration of a progressive render is being rendered, and with what radius. Iteration 0 keeps
+// settings.seed and pixel-centred camera rays, so a one-iteration render is the paper's one-shot image; later
+// iterations draw from their own random streams (iteration_seed) and jitter each camera ray inside its pixel.
 struct IterationParams {
     uint32_t index = 0;
-    float radius = 0.0f;  // > 0: the kernel radius of this pass
+    float radius = 0.0f;  // > 0: the kernel radius of this iteration
 };
-uint64_t iteration_seed(uint64_t seed, uint32_t pass);  // = seed for pass 0
+uint64_t iteration_seed(uint64_t seed, uint32_t iteration);  // = seed for iteration 0
 
-// The radius of pass 0: settings.radius, or when that is 0 default_radius, except for a progressive render
-// that the boundary correction does not cover (switched off, or directional, whose approximate passes it
-// skips): automatic_radius (kernel_radius.h, which depends on what the camera sees).
+// The radius of iteration 0: settings.radius, or when that is 0 default_radius, except for a progressive render
+// that the boundary correction does not cover (switched off, or an approximate method, whose estimates it does
+// not rescale): automatic_radius (kernel_radius.h, which depends on what the camera sees).
 float first_radius(const Scene& scene, const Camera& camera, const RenderSettings& settings);
 
-// One pass of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.
+// One iteration of the pipeline (the whole of a one-shot render). Throws InvalidInput, Cancelled.
 RenderResult render_iteration(const Scene& scene, const Camera& camera, const RenderSettings& settings,
-                         const IterationParams& pass, RenderControl& control);
+                              const IterationParams& iteration, RenderControl& control);
 
-// The render settings ask for: one pass (settings.iterations == 1: render_iteration of pass 0), or a progressive
-// render (progressive.h) stopped by settings.iterations, settings.time_limit or a cancel. A cancel before the first
-// pass is done throws Cancelled; a cancel after it returns the mean of the passes done, with
-// stats.values["cancelled"] = 1. Throws InvalidInput for bad settings.
+// What the settings ask for: one iteration (settings.iterations == 1: render_iteration of iteration 0), or a
+// progressive render (progressive.h) stopped by settings.iterations, settings.time_limit or a cancel. A cancel
+// before the first iteration is done throws Cancelled; a cancel after it returns the mean of the iterations done,
+// with stats.values["cancelled"] = 1. Throws InvalidInput for bad settings. The memory check of a frame is
+// memory_budget.h's check_frame_memory.
 RenderResult render(const Scene& scene, const Camera& camera, const RenderSettings& settings,
                     RenderControl& control);
-
-// (The memory check of a frame is memory_budget.h's check_frame_memory.)
 
 }  // namespace ps

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 
+#include "photonsplat/film.h"
 #include "photonsplat/splat.h"
 
 namespace ps {
@@ -28,7 +29,10 @@ struct RenderSettings {
     // of `photons`; they only add caustic photons (caustic_aim.h). 0 = off; nothing is added without mirrors
     // or glass.
     float aimed_photons = 0.1f;
-    bool caustics_pass = false;       // also splat the caustic photons (L S+ D) alone into RenderResult::caustics
+    // The film outputs the render produces (film.h; combined always). Fewer outputs hold less memory, above all in
+    // a progressive render's running sums.
+    FilmOutputSet outputs = kDefaultFilmOutputs;
+    bool caustics_pass = false;       // also produce the caustics output: the caustic photons (L S+ D) splatted alone
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
     // Progressive rendering (progressive.h): passes of new photons, jittered camera rays and a shrinking radius,
     // averaged. 1 = the paper's one-shot method, exactly the image of a single pass.
@@ -38,5 +42,8 @@ struct RenderSettings {
 };
 
 void validate(const RenderSettings& settings);  // throws InvalidInput naming the field
+
+// The outputs a render with these settings fills: settings.outputs, combined, and caustics with caustics_pass.
+FilmOutputSet requested_outputs(const RenderSettings& settings);
 
 }  // namespace ps

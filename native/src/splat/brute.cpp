@@ -12,6 +12,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
+#include "photonsplat/splatter.h"
 
 namespace ps {
 namespace {
@@ -59,5 +60,25 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
     contributing_counter += double(contributing.load());
     return radiance;
 }
+
+
+namespace {
+
+class BruteSplatter final : public Splatter {
+public:
+    SplatMemory predict_memory(const SplatFrame&, size_t photons, const SplatParams&) const override {
+        SplatMemory m;
+        m.fixed["photon_positions"] = photon_position_bytes(photons);
+        return m;
+    }
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        return {splat_brute(frame.samples, photons, params, control, stats)};
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<Splatter> make_brute_splatter(const RenderSettings&) { return std::make_unique<BruteSplatter>(); }
 
 }  // namespace ps

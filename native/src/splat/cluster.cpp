@@ -67,6 +67,7 @@
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
+#include "photonsplat/splatter.h"
 
 #include "../building_blocks.h"
 
@@ -744,6 +745,55 @@ std::vector<glm::vec3> splat_cluster_cone(const ClusterHierarchy& hierarchy, con
     if (!prepare("cluster_cone", hierarchy, samples, photons, params, control, stats, true))
         return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
     return ClusterSplat<true>(hierarchy, samples, photons, params, control, stats).run();
+}
+
+
+namespace {
+
+// cluster and cluster_cone: the same splat, with or without the normal cones' trivial reject and accept.
+template <bool kCones>
+class ClusterSplatter final : public Splatter {
+public:
+    std::optional<ClusterBuildOptions> hierarchy_options() const override {
+        ClusterBuildOptions options;
+        options.normal_cones = kCones;
+        return options;
+    }
+    SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams& params) const override {
+        SplatMemory m = cluster_splat_memory(frame, photons);
+        if (kCones) {
+            const double nodes = double(frame.hierarchy ? frame.hierarchy->nodes.size() : 0);
+            m.fixed["cone_traversal_nodes"] = nodes * 48.0;
+            m.fixed["accepted_flux"] = nodes * (32.0 + (params.kernel == Kernel::uniform ? 0.0 : 5.0 * 24.0));
+        }
+        return m;
+    }
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        if (kCones) return {splat_cluster_cone(*frame.hierarchy, frame.samples, photons, params, control, stats)};
+        return {splat_cluster(*frame.hierarchy, frame.samples, photons, params, control, stats)};
+    }
+};
+
+}  // namespace
+
+SplatMemory cluster_splat_memory(const SplatFrame& frame, size_t photons) {
+    const double nodes = double(frame.hierarchy ? frame.hierarchy->nodes.size() : 0);
+    SplatMemory m;
+    m.fixed["photon_positions"] = photon_position_bytes(photons);
+    m.fixed["splat_sample_sums"] = sample_sum_bytes(frame.samples.samples.size());
+    m.pair_key = "leaf_photon_lists";
+    m.pair_fixed = (nodes + 2.0) * double(sizeof(size_t));  // per-node offsets of a batch
+    m.per_pair = kPairBytesAtPeak;
+    return m;
+}
+
+std::unique_ptr<Splatter> make_cluster_splatter(const RenderSettings&) {
+    return std::make_unique<ClusterSplatter<false>>();
+}
+
+std::unique_ptr<Splatter> make_cluster_cone_splatter(const RenderSettings&) {
+    return std::make_unique<ClusterSplatter<true>>();
 }
 
 }  // namespace ps

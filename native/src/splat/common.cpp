@@ -1,4 +1,4 @@
-// What every splatting method shares: method names, input validation, and the coordinates photons are splatted in.
+// What every splatting method shares: kernel names, input validation, and the coordinates photons are splatted in.
 #include <cmath>
 #include <limits>
 #include <string>
@@ -11,44 +11,6 @@
 #include "photonsplat/splat.h"
 
 namespace ps {
-namespace {
-
-// Every method and its name; the one list to extend when a method is added.
-struct MethodName {
-    SplatMethod method;
-    const char* name;
-};
-constexpr MethodName kMethodNames[] = {
-    {SplatMethod::brute, "brute"},
-    {SplatMethod::tiled, "tiled"},
-    {SplatMethod::cluster, "cluster"},
-    {SplatMethod::cluster_cone, "cluster_cone"},
-    {SplatMethod::directional, "directional"},
-    {SplatMethod::gather, "gather"},
-};
-
-}  // namespace
-
-const char* to_string(SplatMethod method) {
-    for (const MethodName& m : kMethodNames)
-        if (m.method == method) return m.name;
-    return "unknown";
-}
-
-SplatMethod splat_method_from_string(const std::string& name) {
-    std::string known;
-    for (const MethodName& m : kMethodNames) {
-        if (name == m.name) return m.method;
-        known += known.empty() ? m.name : std::string(", ") + m.name;
-    }
-    throw InvalidInput("splat method", "'" + name + "' is not one of: " + known);
-}
-
-std::vector<std::string> splat_method_names() {
-    std::vector<std::string> names;
-    for (const MethodName& m : kMethodNames) names.emplace_back(m.name);
-    return names;
-}
 
 const char* to_string(Kernel kernel) { return kernel == Kernel::uniform ? "uniform" : "epanechnikov"; }
 

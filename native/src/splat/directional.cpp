@@ -88,6 +88,8 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/render_control.h"
+#include "photonsplat/settings.h"
+#include "photonsplat/splatter.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
@@ -971,9 +973,12 @@ private:
 
 }  // namespace
 
-std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
-                                         const PhotonMap& photons, const SplatParams& params,
-                                         const RenderControl& control, Stats& stats) {
+namespace {
+
+// splat_directional, saying whether the automatic level gave up its bins for the exact cluster splat.
+SplatEstimate directional_estimate(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                   const PhotonMap& photons, const SplatParams& params, const RenderControl& control,
+                                   Stats& stats) {
     validate(params, photons);
     const std::vector<ViewSample>& views = samples.samples;
     validate(hierarchy, samples, photons);
@@ -985,16 +990,67 @@ std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, cons
     stats.values["directional_exact_fallback"] = 0.0;
     if (hierarchy.empty() || photons.photons.empty()) {
         stats.values["directional_level"] = std::max(params.directional_level, 0);
-        return std::vector<glm::vec3>(views.size(), glm::vec3(0.0f));  // (emitted may be 0: nothing to finish)
+        // (emitted may be 0: nothing to finish)
+        return {std::vector<glm::vec3>(views.size(), glm::vec3(0.0f)), false};
     }
     TreeShape shape = tree_shape(hierarchy);
     const auto [level, fallback] = choose_level(hierarchy, shape, params);
     stats.values["directional_level"] = fallback ? -1.0 : double(level);
     if (fallback) {
         stats.values["directional_exact_fallback"] = 1.0;
-        return splat_cluster(hierarchy, samples, photons, params, control, stats);
+        return {splat_cluster(hierarchy, samples, photons, params, control, stats), true};
     }
-    return DirectionalSplat(hierarchy, samples, photons, params, control, stats, std::move(shape), level).run();
+    return {DirectionalSplat(hierarchy, samples, photons, params, control, stats, std::move(shape), level).run(),
+            false};
+}
+
+class DirectionalSplatter final : public Splatter {
+public:
+    explicit DirectionalSplatter(int level) : level_(level) {}
+
+    std::optional<ClusterBuildOptions> hierarchy_options() const override {
+        ClusterBuildOptions options;
+        options.leaf_summaries = true;
+        return options;
+    }
+
+    SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams&) const override {
+        // When the radius is below a leaf's size it falls back to the exact cluster splat and its pair lists.
+        SplatMemory m = cluster_splat_memory(frame, photons);
+        const double nodes = double(frame.hierarchy ? frame.hierarchy->nodes.size() : 0);
+        // 8 direction bins × 6 slots of 8 bytes per node at most (the cut level has fewer), and the cut's
+        // bookkeeping (facets, cuts, walk, parent/height/order) per node, the cut of every sample.
+        m.fixed["direction_bins"] = nodes * 8.0 * 6.0 * 8.0;
+        m.fixed["directional_nodes"] = nodes * 256.0 + double(frame.samples.samples.size()) * 8.0;
+        return m;
+    }
+
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        SplatParams own = params;
+        own.directional_level = level_;
+        // In a progressive render an explicit level would keep its blocks however small r gets, and the mean would
+        // converge to the blocky image: once the leaves outgrow the radius the automatic rule takes over, which
+        // splats exactly.
+        if (frame.iteration > 0 && level_ >= 0 && directional_leaves_exceed_radius(*frame.hierarchy, params.radius))
+            own.directional_level = -1;
+        return directional_estimate(*frame.hierarchy, frame.samples, photons, own, control, stats);
+    }
+
+private:
+    int level_;  // RenderSettings::directional_level: from the leaves; -1 = chosen from the radius
+};
+
+}  // namespace
+
+std::vector<glm::vec3> splat_directional(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                         const PhotonMap& photons, const SplatParams& params,
+                                         const RenderControl& control, Stats& stats) {
+    return directional_estimate(hierarchy, samples, photons, params, control, stats).radiance;
+}
+
+std::unique_ptr<Splatter> make_directional_splatter(const RenderSettings& settings) {
+    return std::make_unique<DirectionalSplatter>(settings.directional_level);
 }
 
 }  // namespace ps

@@ -56,6 +56,7 @@
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
+#include "photonsplat/splatter.h"
 
 namespace ps {
 namespace {
@@ -416,5 +417,31 @@ std::vector<glm::vec3> splat_gather(const ViewSamples& samples, const PhotonMap&
     stats.bytes["gather_lists"] = double(list_bytes);
     return radiance;
 }
+
+
+namespace {
+
+class GatherSplatter final : public Splatter {
+public:
+    SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams&) const override {
+        const double p = double(photons);
+        SplatMemory m;
+        // Grid photons (position, index, record), the sort entries they are made from, the hash table (at most
+        // 2 cells per photon rounded up to a power of two: 4 × 16 bytes a photon), the positions.
+        m.fixed["photon_grid"] = p * double(sizeof(glm::vec3) + 4 + sizeof(Photon)) + p * 4.0 * 16.0;
+        m.fixed["photon_positions"] = photon_position_bytes(photons) + p * 16.0;
+        // Each thread's candidate list and near list hold at most every photon once.
+        m.fixed["gather_lists"] = double(std::max(frame.threads, 1)) * std::min(p, 65536.0) * 16.0;
+        return m;
+    }
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        return {splat_gather(frame.samples, photons, params, control, stats)};
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<Splatter> make_gather_splatter(const RenderSettings&) { return std::make_unique<GatherSplatter>(); }
 
 }  // namespace ps

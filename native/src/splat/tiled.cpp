@@ -62,6 +62,7 @@
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
+#include "photonsplat/splatter.h"
 
 #include "../building_blocks.h"
 
@@ -783,5 +784,34 @@ std::vector<glm::vec3> splat_tiled(const ViewSamples& samples, const Camera& cam
     }
     return TiledSplat(samples, camera, photons, params, control, stats).run();
 }
+
+
+namespace {
+
+class TiledSplatter final : public Splatter {
+public:
+    SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams&) const override {
+        const Camera& camera = frame.camera;
+        const double s = double(frame.samples.samples.size()), p = double(photons);
+        const double tiles = std::ceil(camera.width() / 32.0) * std::ceil(camera.height() / 32.0);
+        SplatMemory m;
+        m.fixed["tile_bounds"] = tiles * (12.0 + 2.0 * 24.0) + (camera.width() + camera.height()) * 16.0 / 32.0 + 64.0;
+        m.fixed["tile_samples"] = (s + tiles + s / 32.0 + 2.0) * 4.0;
+        m.fixed["photon_positions"] = photon_position_bytes(photons);
+        m.fixed["splat_sample_sums"] = sample_sum_bytes(frame.samples.samples.size());
+        m.pair_key = "tile_photon_lists";
+        m.pair_fixed = p * 8.0 + tiles * 8.0 + double(std::max(frame.threads, 1)) * 64.0;  // counts, offsets, chunks
+        m.per_pair = kPairBytesAtPeak;
+        return m;
+    }
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        return {splat_tiled(frame.samples, frame.camera, photons, params, control, stats)};
+    }
+};
+
+}  // namespace
+
+std::unique_ptr<Splatter> make_tiled_splatter(const RenderSettings&) { return std::make_unique<TiledSplatter>(); }
 
 }  // namespace ps
