@@ -6,9 +6,9 @@
 //
 // What counts as a failure: a crash or sanitizer report (the build adds address and undefined), an exception other
 // than InvalidInput (bad input must be refused naming the field), or a non-finite pixel from a render the core
-// accepted; a failure aborts. Built with clang and run by scripts/sanitize.sh from fuzz/corpus and the reproducers
-// in fuzz/regressions/; fuzz/replay.cpp runs this same function on given files without libFuzzer (the ctest tests
-// FuzzRegression.*).
+// accepted; a failure aborts. Built with clang and run by scripts/sanitize.sh from the seed corpus
+// fuzz/corpus.tar.gz and the reproducers in fuzz/regressions/; fuzz/replay.cpp runs this same function on given
+// files without libFuzzer (the ctest tests FuzzRegression.*).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
