@@ -1,12 +1,14 @@
 // libFuzzer target over the entry points a script or the add-on reaches: Scene::add_material / add_mesh /
 // add_light / set_background, the Camera constructor, validate(RenderSettings) and render(). The input bytes are
 // decoded into a small scene (<= 4 materials, <= 3 meshes of <= 12 vertices and triangles, some instanced twice,
-// <= 3 lights), a camera of <= 12×12 pixels and settings with <= 1500 photons and <= 2 progressive passes, so
-// that one input runs in milliseconds.
+// <= 3 lights), a camera of <= 12×12 pixels and settings with <= 1500 photons and <= 2 progressive iterations, so
+// that one input renders quickly.
 //
 // What counts as a failure: a crash or sanitizer report (the build adds address and undefined), an exception other
 // than InvalidInput (bad input must be refused naming the field), or a non-finite pixel from a render the core
-// accepted. Built by scripts/sanitize.sh with clang; run: build-fuzz/photonsplat_fuzz fuzz/corpus -max_total_time=60
+// accepted; a failure aborts. Built with clang and run by scripts/sanitize.sh from the seed corpus
+// fuzz/corpus.tar.gz and the reproducers in fuzz/regressions/; fuzz/replay.cpp runs this same function on given
+// files without libFuzzer (the ctest tests FuzzRegression.*).
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -49,21 +51,31 @@ glm::vec3 colour(FuzzedDataProvider& in) {
     return {in.ConsumeProbability<float>(), in.ConsumeProbability<float>(), in.ConsumeProbability<float>()};
 }
 
-void add_materials(FuzzedDataProvider& in, Scene& scene) {
-    const int count = in.ConsumeIntegralInRange<int>(0, 4);
+// Up to max_count items named prefix0, prefix1, ..., each of one of the first `kinds` kinds; fill sets the other
+// fields from the input and add hands the item to the scene, which may refuse it (InvalidInput: left out).
+template <class Item, class Fill, class Add>
+void add_named(FuzzedDataProvider& in, int max_count, const char* prefix, int kinds, Fill fill, Add add) {
+    const int count = in.ConsumeIntegralInRange<int>(0, max_count);
     for (int i = 0; i < count; ++i) {
-        Material m;
-        m.name = "m" + std::to_string(i);
-        m.kind = static_cast<MaterialKind>(in.ConsumeIntegralInRange<int>(0, 3));
+        Item item;
+        item.name = prefix + std::to_string(i);
+        item.kind = static_cast<decltype(item.kind)>(in.ConsumeIntegralInRange<int>(0, kinds - 1));
+        fill(item);
+        try {
+            add(item);
+        } catch (const InvalidInput&) {
+        }
+    }
+}
+
+void add_materials(FuzzedDataProvider& in, Scene& scene) {
+    const auto fill = [&in](Material& m) {
         m.color = colour(in);
         m.ior = in.ConsumeBool() ? 1.5f : any_float(in, 3.0f);
         m.emission = in.ConsumeIntegralInRange<int>(0, 3) == 0 ? colour(in) : glm::vec3(0.0f);
         m.roughness = in.ConsumeBool() ? in.ConsumeProbability<float>() : any_float(in, 2.0f);
-        try {
-            scene.add_material(m);
-        } catch (const InvalidInput&) {
-        }
-    }
+    };
+    add_named<Material>(in, 4, "m", 4, fill, [&scene](const Material& m) { scene.add_material(m); });
 }
 
 void add_meshes(FuzzedDataProvider& in, Scene& scene) {
@@ -104,11 +116,7 @@ void add_meshes(FuzzedDataProvider& in, Scene& scene) {
 }
 
 void add_lights(FuzzedDataProvider& in, Scene& scene) {
-    const int count = in.ConsumeIntegralInRange<int>(0, 3);
-    for (int i = 0; i < count; ++i) {
-        Light light;
-        light.name = "light" + std::to_string(i);
-        light.kind = static_cast<LightKind>(in.ConsumeIntegralInRange<int>(0, 2));
+    const auto fill = [&in](Light& light) {
         light.value = in.ConsumeBool() ? 50.0f * colour(in) : any_vec3(in, 1e3f);
         light.position = in.ConsumeBool() ? glm::vec3(0.0f, 0.0f, 1.5f) : any_vec3(in, 3.0f);
         light.direction = in.ConsumeBool() ? glm::vec3(0.0f, 0.0f, -1.0f) : any_vec3(in, 1.0f);
@@ -116,11 +124,8 @@ void add_lights(FuzzedDataProvider& in, Scene& scene) {
         light.angle = in.ConsumeBool() ? 0.0f : any_float(in, 4.0f);
         light.axis_u = in.ConsumeBool() ? glm::vec3(1.0f, 0.0f, 0.0f) : any_vec3(in, 2.0f);
         light.axis_v = in.ConsumeBool() ? glm::vec3(0.0f, 1.0f, 0.0f) : any_vec3(in, 2.0f);
-        try {
-            scene.add_light(light);
-        } catch (const InvalidInput&) {
-        }
-    }
+    };
+    add_named<Light>(in, 3, "light", 3, fill, [&scene](const Light& light) { scene.add_light(light); });
     try {
         scene.set_background(in.ConsumeBool() ? glm::vec3(0.0f) : colour(in));
     } catch (const InvalidInput&) {

@@ -3,9 +3,10 @@
 #   1. AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan, gcc) of the core and the WHOLE native suite;
 #   2. ThreadSanitizer build (build-tsan, gcc) running the cross-thread control tests (see below why not more);
 #   3. a clang libFuzzer build (build-fuzz) of fuzz/fuzz_render.cpp, run for PHOTONSPLAT_FUZZ_SECONDS (60) from
-#      the checked-in corpus fuzz/corpus (new inputs go to a scratch directory; see docs/robustness.md).
+#      the seed corpus fuzz/corpus.tar.gz (unpacked into a scratch directory, where new inputs go too) and the
+#      reproducers in fuzz/regressions/ (see docs/robustness.md, Fuzzing).
 # (One clang tree for the suite and the fuzzer would save a build, but one existing test,
-# SplatClusterCone.LongLeafListsWithAccepts, fails its precondition when built with clang: see the report.)
+# SplatClusterCone.LongLeafListsWithAccepts, fails its precondition when built with clang: see docs/robustness.md.)
 # PHOTONSPLAT_SANITIZE_STEPS="asan tsan fuzz" selects steps. The Python module is not built in these trees.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -49,12 +50,14 @@ for step in $steps; do
       configure build-fuzz photonsplat_fuzz -DCMAKE_CXX_COMPILER=clang++-14 -DPHOTONSPLAT_BUILD_TESTS=OFF \
         -DPHOTONSPLAT_BUILD_FUZZER=ON -DPHOTONSPLAT_SANITIZE="address;undefined;fuzzer-no-link"
       scratch="$(mktemp -d)"
+      tar -xzf "$root/fuzz/corpus.tar.gz" -C "$scratch"  # -> $scratch/corpus
+      mkdir "$scratch/new"
       # The fuzzer's own exit status decides, not only the artifacts: a crash inside a library (an abort from
       # an assertion) may end the run before libFuzzer writes a crash-* file.
       fuzz_status=0
       ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-        "$root/build-fuzz/photonsplat_fuzz" "$scratch" "$root/fuzz/corpus" -max_total_time="$fuzz_seconds" \
-        -max_len=4096 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$scratch/" \
+        "$root/build-fuzz/photonsplat_fuzz" "$scratch/new" "$scratch/corpus" "$root/fuzz/regressions" \
+        -max_total_time="$fuzz_seconds" -max_len=4096 -timeout=10 -rss_limit_mb=4096 -print_final_stats=1 -artifact_prefix="$scratch/" \
         >"$scratch/fuzz.log" 2>&1 || fuzz_status=$?
       grep -E "^(#[0-9]+[[:space:]]+(INITED|DONE)|stat::|==[0-9]+==|SUMMARY|Done)" "$scratch/fuzz.log" || true
       if [ "$fuzz_status" -ne 0 ] || ls "$scratch"/crash-* "$scratch"/timeout-* "$scratch"/oom-* >/dev/null 2>&1; then
