@@ -238,7 +238,7 @@ class FakeEngine:
         return False
 
 
-for _name in ("render", "_render_into", "_cancel_requested", "_cancelled", "_report_warnings"):
+for _name in ("render", "_render_into", "_cancel_requested", "_cancelled"):
     setattr(FakeEngine, _name, getattr(engine.PhotonSplatRenderEngine, _name))
 
 

@@ -10,7 +10,7 @@ and every surface may also emit radiance `emission` (W/(sr m^2), both faces, as 
 
 We read the node tree Cycles would render (get_output_node('CYCLES')) and map the shader plugged into the
 Surface input. Whatever cannot be represented exactly is replaced by the nearest supported surface, and a
-note says so; export/__init__.py turns the notes into one warning per material in the render report.
+note says so; the sync (export/sync.py) turns the notes into one warning per material in its report.
 
 Known approximations that are NOT warned about, because they apply to nearly every material:
   - Principled BSDF's dielectric specular layer (Specular input, about 4 % reflectance) is dropped, and its
