@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import render_pixels, use_photonsplat
+from blender_helpers import render_pixels, uniform_world, use_photonsplat
 from photonsplat import engine, export
 
 
@@ -22,15 +22,6 @@ def add_camera(scene, location=(0.0, 0.0, 10.0), rotation=(0.0, 0.0, 0.0), ortho
     scene.collection.objects.link(cam)
     scene.camera = cam
     return cam
-
-
-def uniform_world(scene, strength=1.0):
-    world = bpy.data.worlds.new("White")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    background.inputs["Strength"].default_value = strength
-    scene.world = world
 
 
 def material(name, shader="ShaderNodeBsdfDiffuse"):

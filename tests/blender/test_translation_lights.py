@@ -10,6 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
+from blender_helpers import uniform_world
 from test_render import render_with_both
 
 
@@ -58,12 +59,7 @@ def test_round_area_lights_match_cycles(shape, diffuse_scene, tmp_path, core):
 def test_world_background_matches_cycles(diffuse_scene, tmp_path, core):
     """A uniform world of colour × strength lights the box through its open front."""
     bpy.data.objects.remove(bpy.data.objects["Light"])
-    world = bpy.data.worlds.new("Sky")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (0.4, 0.6, 1.0, 1.0)
-    background.inputs["Strength"].default_value = 2.0
-    diffuse_scene.world = world
+    uniform_world(diffuse_scene, (0.4, 0.6, 1.0), 2.0)
     # From the usual viewpoint a one-pixel ring shows the box's rim against the sky (radiance 1.33 next to 0.1):
     # Cycles' antialiased pixels there differ from our centre samples by 0.2 each, 6 % of the image mean, though
     # the inside agrees to 0.2 %. Step in so that only the inside of the box is seen.

@@ -173,7 +173,8 @@ def test_moved_object_renders_as_a_fresh_export(caustics_scene, core):
 
 
 def test_thousand_geometry_node_instances_are_one_core_mesh(empty_scene, core):
-    from test_translation import add_camera, points_grid_with_instances, uniform_world
+    from blender_helpers import uniform_world
+    from test_translation import add_camera, points_grid_with_instances
     grid = points_grid_with_instances(25, 40)
     add_camera(empty_scene, location=(0.0, 0.0, 30.0))
     uniform_world(empty_scene)
