@@ -1,5 +1,5 @@
 """Progressive F12 inside Blender: scene.photonsplat.passes / time_limit reach the core, the running mean is
-shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported. ~5 s."""
+shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported."""
 import bpy
 import numpy as np
 import pytest

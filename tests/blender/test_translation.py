@@ -1,7 +1,7 @@
 """Scene translation with the real core: textures, instancing, every object type that becomes a mesh, camera
 framing against Cycles, holdout / hidden objects, and notes for what is approximated.
 
-Images are tiny (16-64 pixels); the whole file takes about 20 s.
+Images are tiny (16-64 pixels).
 """
 
 import math
@@ -235,8 +235,8 @@ def test_every_object_type_renders(make, instances, empty_scene, tmp_path, core)
 
 def test_hidden_camera_invisible_and_holdout_objects(empty_scene, tmp_path, core):
     """hide_render: gone. visible_camera off: unseen but still shadows. Holdout: black where seen (its alpha 0
-    is in the core's view samples, tests/native/test_translation.cpp; the final image is opaque until film
-    transparency is offered)."""
+    is in the core's view samples, tests/native/test_translation.cpp; the final image is opaque unless Film >
+    Transparent is on)."""
     add_camera(empty_scene, ortho_scale=4.0)
     bpy.ops.mesh.primitive_plane_add(size=10.0)                                  # the floor, lit by a sun
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))

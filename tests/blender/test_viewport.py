@@ -1,6 +1,6 @@
 """The viewport's machinery in blender -b (no window: drawing itself is tested under Xvfb by
 tests/window/viewport_window.py): the sync kept between updates re-exports only what changed, and the background
-refinement produces an image that improves pass after pass and stops when asked. About 10 s on 2 cores."""
+refinement produces an image that improves pass after pass and stops when asked."""
 
 import time
 from dataclasses import replace
@@ -150,7 +150,7 @@ def test_busy_scene_is_rebuilt_not_changed(caustics_scene, core):
 def test_moved_object_renders_as_a_fresh_export(caustics_scene, core):
     """After a transform-only update (top-level BVH refit in the kept scene), the render equals that of a
     scene exported afresh from the moved objects, same seed, 40×40 pixels, one thread. Tolerance: 1e-4 per pixel
-    and channel (a refitted and a fresh BVH could order equal-distance hits differently); measured: identical."""
+    and channel (a refitted and a fresh BVH could order equal-distance hits differently)."""
     sync = export.BlenderSync(core)
     sync.sync(bpy.context.evaluated_depsgraph_get())
     camera = viewport_camera(core, bpy.context.scene, 40, 40)

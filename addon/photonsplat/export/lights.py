@@ -1,7 +1,7 @@
 """Blender lights -> the core's lights, converting Cycles 3.4's units into radiometric ones.
 
-The core takes physical quantities; Blender's light settings follow Cycles' conventions, measured on Cycles 3.4
-(docs/design.md section 7). With colour c and Power/Strength P:
+The core takes physical quantities; Blender's light settings follow Cycles 3.4's conventions. With colour c and
+Power/Strength P:
   point  isotropic intensity I = c P / (4 pi)  [W/sr]; radius = Radius (soft shadows)
   spot   the same intensity on the axis, with Cycles 3.4's falloff I(θ) = I cos θ smoothstep(...) inside the cone
          of full angle Spot Size, softened by Blend (the core's spot light); radius as for point lights
