@@ -164,24 +164,27 @@ class ViewportSession:
         gpu.state.blend_set('NONE')
 
     def _status(self, engine):
+        text = self._status_text()
+        if text is not None:
+            # A viewport's reports reach only the console: the status line says that there are some.
+            count = len(self.warnings) if not self.error else 0
+            engine.update_stats("", f"Photon Splat | {text}" + (f" | {count} warnings" if count else ""))
+
+    def _status_text(self):
         if self.error:
-            engine.update_stats("", f"Photon Splat | Error: {self.error}")
-            return
+            return f"Error: {self.error}"
         refinement = self.refinement
         if refinement is None:
-            return
+            return None
         if refinement.error:
-            engine.update_stats("", f"Photon Splat | Error: {refinement.error}")
-            return
+            return f"Error: {refinement.error}"
         frame = refinement.latest()
         if frame is None:
-            engine.update_stats("", "Photon Splat | Rendering first image")
-        elif refinement.finished:
-            engine.update_stats("", f"Photon Splat | Done: {frame.passes} passes, {frame.seconds:.1f} s")
-        else:
-            engine.update_stats("", f"Photon Splat | Pass {frame.passes}"
-                                    f"{'/' + str(self.settings.max_passes) if self.settings.max_passes else ''}"
-                                    f" | {frame.seconds:.1f} s")
+            return "Rendering first image"
+        if refinement.finished:
+            return f"Done: {frame.passes} passes, {frame.seconds:.1f} s"
+        limit = f"/{self.settings.max_passes}" if self.settings.max_passes else ""
+        return f"Pass {frame.passes}{limit} | {frame.seconds:.1f} s"
 
     # --- the background work ----------------------------------------------------------------------------
     def restart(self):

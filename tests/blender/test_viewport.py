@@ -196,16 +196,37 @@ def test_thousand_geometry_node_instances_are_one_core_mesh(empty_scene, core):
 
 
 class FakeEngine:
-    """What ViewportSession needs of a RenderEngine outside view_draw: redraw requests (counted)."""
+    """What ViewportSession needs of a RenderEngine outside view_draw: redraw requests (counted), reports."""
 
     def __init__(self):
         self.redraws = 0
+        self.reports = []
 
     def tag_redraw(self):
         self.redraws += 1
 
     def report(self, kind, message):
-        pass
+        self.reports.append(message)
+
+
+def test_viewport_reports_the_notes_of_a_final_render(empty_scene, core):
+    """One sync, one list of notes: an unsupported object and a scene without light are reported by the viewport
+    as the final render reports them, once until they change."""
+    from test_translation import add_camera
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    empty_scene.collection.objects.link(bpy.data.objects.new("Fog", bpy.data.volumes.new("Fog")))
+    session = viewport.ViewportSession(core)
+    engine = FakeEngine()
+    session.update(engine, bpy.context.evaluated_depsgraph_get())
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    assert any("volume objects are not supported" in w for w in frame.warnings)
+    assert any("no lights" in w for w in frame.warnings)
+    assert session.warnings == frame.warnings
+    assert engine.reports == export.warning_lines(frame.warnings)
+    session.update(engine, bpy.context.evaluated_depsgraph_get())
+    assert engine.reports == export.warning_lines(frame.warnings)      # unchanged: not reported again
+    session.stop()
 
 
 def test_session_stops_its_refinement_before_moving_an_instance(caustics_scene, core):
