@@ -20,11 +20,6 @@ import numpy as np
 
 from . import export, passes
 
-# Warnings beyond this many are summarised in one line: a scene with 500 odd materials should not bury
-# the render report.
-MAX_WARNINGS_SHOWN = 20
-
-
 class CoreUnavailable(Exception):
     """The compiled module (photonsplat._core) is missing or failed to load."""
 
@@ -131,7 +126,8 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         frame.settings.transparent = depsgraph.scene.render.film_transparent
         frame.settings.caustics_pass = view_layer.photonsplat.use_pass_caustics
         outcome.warnings = frame.warnings
-        self._report_warnings(frame.warnings)
+        for line in export.warning_lines(frame.warnings):
+            self.report({'WARNING'}, line)
         if self._cancel_requested():
             self._cancelled(outcome)
             return
@@ -195,12 +191,6 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         outcome.message = "render cancelled"
         self.update_stats("", "Photon Splat | Cancelled")
         self.report({'WARNING'}, "Photon Splat: render cancelled")
-
-    def _report_warnings(self, warnings):
-        for line in warnings[:MAX_WARNINGS_SHOWN]:
-            self.report({'WARNING'}, f"Photon Splat: {line}")
-        if len(warnings) > MAX_WARNINGS_SHOWN:
-            self.report({'WARNING'}, f"Photon Splat: {len(warnings) - MAX_WARNINGS_SHOWN} more warnings not shown")
 
 
 def _describe(error):

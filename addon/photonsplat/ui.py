@@ -10,19 +10,23 @@ import bpy
 from bpy.types import Panel
 
 from . import engine
-from .export import materials
+from .export import lights, materials, world
 
 ENGINE_ID = engine.PhotonSplatRenderEngine.bl_idname
 
 
 class PhotonSplatPanel:
-    """Mix-in: a Properties-editor panel shown only while Photon Splat is the render engine."""
+    """Mix-in: a Properties-editor panel shown only while Photon Splat is the render engine (and, with
+    `context_member`, only when the context has that data block: a light, a material, a world)."""
     bl_space_type = 'PROPERTIES'
     bl_region_type = 'WINDOW'
     COMPAT_ENGINES = {ENGINE_ID}
+    context_member = None
 
     @classmethod
     def poll(cls, context):
+        if cls.context_member is not None and getattr(context, cls.context_member, None) is None:
+            return False
         return context.engine in cls.COMPAT_ENGINES
 
 
@@ -49,6 +53,13 @@ def _wrap(text, width):
     return lines + [line] if line else lines
 
 
+def _property_split(layout):
+    """`layout` in Blender's property-split style: labels on the left, values on the right, no keyframe dots."""
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
+
+
 def _draw_notes(layout, notes):
     for note in notes:
         layout.label(text=note, icon='INFO')
@@ -61,9 +72,7 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
     bl_context = "render"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _property_split(self.layout)
         _draw_core_status(layout)
         settings = context.scene.photonsplat
         col = layout.column()
@@ -90,9 +99,7 @@ class RENDER_PT_photonsplat_performance(PhotonSplatPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _property_split(self.layout)
         layout.prop(context.scene.photonsplat, "threads")
         layout.prop(context.scene.photonsplat, "memory_budget")
 
@@ -103,9 +110,7 @@ class RENDER_PT_photonsplat_viewport(PhotonSplatPanel, Panel):
     bl_parent_id = "RENDER_PT_photonsplat"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _property_split(self.layout)
         settings = context.scene.photonsplat
         col = layout.column(heading="First Image")
         col.prop(settings, "viewport_preview_photons", text="Photons")
@@ -122,9 +127,7 @@ class RENDER_PT_photonsplat_film(PhotonSplatPanel, Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _property_split(self.layout)
         layout.prop(context.scene.render, "film_transparent", text="Transparent")
 
 
@@ -133,9 +136,7 @@ class VIEWLAYER_PT_photonsplat_passes(PhotonSplatPanel, Panel):
     bl_context = "view_layer"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = _property_split(self.layout)
         view_layer = context.view_layer
         col = layout.column(heading="Data", align=True)
         col.prop(view_layer, "use_pass_combined")
@@ -153,17 +154,13 @@ class VIEWLAYER_PT_photonsplat_passes(PhotonSplatPanel, Panel):
 class DATA_PT_photonsplat_light(PhotonSplatPanel, Panel):
     bl_label = "Light"
     bl_context = "data"
-
-    @classmethod
-    def poll(cls, context):
-        return context.light is not None and super().poll(context)
+    context_member = "light"
 
     def draw(self, context):
         light = context.light
         layout = self.layout
         layout.row().prop(light, "type", expand=True)
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        _property_split(layout)
         col = layout.column()
         col.prop(light, "color")
         col.prop(light, "energy")
@@ -178,10 +175,8 @@ class DATA_PT_photonsplat_light(PhotonSplatPanel, Panel):
             else:
                 col.prop(light, "size", text="Size X")
                 col.prop(light, "size_y", text="Y")
-        if light.type == 'SPOT':
-            col.label(text="The spot cone is not rendered yet (lit like a point light)", icon='INFO')
-        elif light.type == 'AREA' and light.shape in {'DISK', 'ELLIPSE'}:
-            col.label(text="Rendered as a rectangle of the same area", icon='INFO')
+        # What the export approximates or skips of this light, in the words of the render report.
+        _draw_notes(layout, lights.conversion_notes(light))
 
 
 def _draw_surface_nodes(layout, id_block, fallback_property):
@@ -198,10 +193,7 @@ def _draw_surface_nodes(layout, id_block, fallback_property):
 class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
     bl_label = "Surface"
     bl_context = "material"
-
-    @classmethod
-    def poll(cls, context):
-        return context.material is not None and super().poll(context)
+    context_member = "material"
 
     def draw(self, context):
         material = context.material
@@ -217,13 +209,14 @@ class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
 class WORLD_PT_photonsplat_surface(PhotonSplatPanel, Panel):
     bl_label = "Surface"
     bl_context = "world"
-
-    @classmethod
-    def poll(cls, context):
-        return context.world is not None and super().poll(context)
+    context_member = "world"
 
     def draw(self, context):
         _draw_surface_nodes(self.layout, context.world, fallback_property="color")
+        # What the export approximates of this world (environment textures, sky models...).
+        notes = []
+        world.background_radiance(context.world, notes)
+        _draw_notes(self.layout, notes)
 
 
 # --- Blender's own panels ------------------------------------------------------------------------------------

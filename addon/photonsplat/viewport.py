@@ -1,9 +1,9 @@
 """The 3D viewport in Rendered shading: what RenderEngine.view_update / view_draw do for Photon Splat.
 
 Both run on Blender's main thread, so neither may wait on the core:
-  - view_update (a depsgraph change) updates the core scene through the scene cache (export/scene_cache.py:
-    only what changed is read from Blender; moved objects and lights are changed in the existing core scene
-    once the running refinement has stopped) and restarts the refinement;
+  - view_update (a depsgraph change) updates the core scene through the sync the final render uses too
+    (export/sync.py, kept between updates: only what changed is read from Blender; moved objects and lights are
+    changed in the existing core scene once the running refinement has stopped) and restarts the refinement;
   - view_draw compares the view (matrices, region size) with the one being rendered, restarts the refinement
     when it changed (navigation produces no view_update), and draws the newest image it has.
 The rendering itself runs in refine.Refinement's thread; it asks Blender for a redraw after every image.
@@ -20,7 +20,6 @@ import numpy as np
 from gpu_extras.presets import draw_texture_2d
 
 from . import export, refine
-from .export.scene_cache import SceneCache
 
 _sessions = weakref.WeakSet()
 
@@ -40,13 +39,12 @@ def stop_all(wait=1.0):
 
 
 def refine_settings(core, scene):
-    """scene.photonsplat -> RefineSettings of the viewport (read on the main thread; the worker gets a copy)."""
+    """scene.photonsplat -> RefineSettings of the viewport (read on the main thread; the worker gets a copy).
+    The render fields are the final render's, but for the photon count; the refinement sets its own passes
+    and time limit."""
     props = scene.photonsplat
-    render = dict(photons=props.viewport_photons, radius=props.radius, method=props.method,
-                  max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
-                  direct_samples=props.direct_samples, kernel=props.kernel,
-                  boundary_correction=props.boundary_correction,
-                  directional_level=props.directional_level, transparent=scene.render.film_transparent)
+    render = dict(export.render_settings_kwargs(props), photons=props.viewport_photons, passes=1, time_limit=0.0,
+                  transparent=scene.render.film_transparent)
     core.RenderSettings(**render)       # validate now: a bad value is reported, not raised in the thread
     return refine.RefineSettings(render=render, preview_photons=props.viewport_preview_photons,
                                  preview_divider=props.viewport_preview_divider,
@@ -73,12 +71,13 @@ def view_camera_factory(core, view_matrix, window_matrix):
 
 
 class ViewportSession:
-    """State of one Rendered viewport: the scene cache, the core scene, the running refinement, the texture."""
+    """State of one Rendered viewport: the sync, the core scene, the running refinement, the texture."""
 
     def __init__(self, core):
         self.core = core
-        self.cache = SceneCache()
-        self.scene = None             # core Scene kept up to date by the cache
+        self.sync = export.BlenderSync(core)
+        self.scene = None             # core Scene kept up to date by the sync
+        self.warnings = []            # the sync's notes, reported when they change
         self.settings = None
         self.refinement = None
         self.error = None
@@ -100,13 +99,14 @@ class ViewportSession:
         self._engine = weakref.ref(engine)
         try:
             settings = refine_settings(self.core, depsgraph.scene)
-            self.last_sync = self.cache.sync(self.core, depsgraph, release=self._release_scene)
+            self.last_sync = self.sync.sync(depsgraph, release=self._release_scene)
             # (A refinement stopped for an in-place change is restarted even if the change showed nothing.)
             changed = (self.last_sync.changed or self.scene is None or settings != self.settings
                        or self.refinement is None)
             self.settings = settings
-            self.scene = self.cache.scene
+            self.scene = self.sync.scene
             self.error = None
+            self._report_warnings(engine)
         except (ValueError, export.ExportError) as error:
             self.error = str(error)
             self.scene = None
@@ -114,10 +114,17 @@ class ViewportSession:
         if changed:               # selection and other changes that do not show restart nothing
             self.restart()
 
+    def _report_warnings(self, engine):
+        """The sync's notes, reported as the final render reports them, each time they change."""
+        if self.sync.notes != self.warnings:
+            self.warnings = list(self.sync.notes)
+            for line in export.warning_lines(self.warnings):
+                engine.report({'WARNING'}, line)
+
     def _release_scene(self):
-        """Before the cache changes the core scene in place (moved objects, lights): the running refinement
+        """Before the sync changes the core scene in place (moved objects, lights): the running refinement
         must be done with it. Stops it and waits up to RELEASE_WAIT s on the main thread (a pass polls its
-        cancel flag about 10x a second); False when it is still running, and the cache builds a new scene."""
+        cancel flag about 10x a second); False when it is still running, and the sync builds a new scene."""
         self.release_seconds = 0.0
         if self.refinement is None:
             return True
@@ -157,24 +164,27 @@ class ViewportSession:
         gpu.state.blend_set('NONE')
 
     def _status(self, engine):
+        text = self._status_text()
+        if text is not None:
+            # A viewport's reports reach only the console: the status line says that there are some.
+            count = len(self.warnings) if not self.error else 0
+            engine.update_stats("", f"Photon Splat | {text}" + (f" | {count} warnings" if count else ""))
+
+    def _status_text(self):
         if self.error:
-            engine.update_stats("", f"Photon Splat | Error: {self.error}")
-            return
+            return f"Error: {self.error}"
         refinement = self.refinement
         if refinement is None:
-            return
+            return None
         if refinement.error:
-            engine.update_stats("", f"Photon Splat | Error: {refinement.error}")
-            return
+            return f"Error: {refinement.error}"
         frame = refinement.latest()
         if frame is None:
-            engine.update_stats("", "Photon Splat | Rendering first image")
-        elif refinement.finished:
-            engine.update_stats("", f"Photon Splat | Done: {frame.passes} passes, {frame.seconds:.1f} s")
-        else:
-            engine.update_stats("", f"Photon Splat | Pass {frame.passes}"
-                                    f"{'/' + str(self.settings.max_passes) if self.settings.max_passes else ''}"
-                                    f" | {frame.seconds:.1f} s")
+            return "Rendering first image"
+        if refinement.finished:
+            return f"Done: {frame.passes} passes, {frame.seconds:.1f} s"
+        limit = f"/{self.settings.max_passes}" if self.settings.max_passes else ""
+        return f"Pass {frame.passes}{limit} | {frame.seconds:.1f} s"
 
     # --- the background work ----------------------------------------------------------------------------
     def restart(self):

@@ -51,6 +51,31 @@ def read_exr(path):
         bpy.data.images.remove(image)
 
 
+def uniform_world(scene, color=(1.0, 1.0, 1.0), strength=1.0):
+    """A new world of constant colour x strength (a Background node) for `scene`; returns it."""
+    world = bpy.data.worlds.new("Uniform")
+    world.use_nodes = True
+    background = world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (*color, 1.0)
+    background.inputs["Strength"].default_value = strength
+    scene.world = world
+    return world
+
+
+def caustic_landing(eye):
+    """In blend_scenes/cornell_caustics.blend: the floor points where the light's rays through the glass sphere
+    land, those seen from `eye`, and the (center, radius) of the glass and the mirror sphere."""
+    from scene_geometry import caustic_floor_points, visible_from
+
+    glass, mirror = bpy.data.objects["GlassSphere"], bpy.data.objects["MirrorSphere"]
+    spheres = [(np.array(ob.matrix_world.translation), ob.dimensions.x / 2.0) for ob in (glass, mirror)]
+    (center, radius), _ = spheres
+    ior = bpy.data.materials["Glass"].node_tree.nodes["Glass BSDF"].inputs["IOR"].default_value
+    light = np.array(bpy.data.objects["Light"].matrix_world.translation)
+    landing = caustic_floor_points(light, center, radius, ior)
+    return landing[visible_from(landing, eye, spheres)], spheres
+
+
 def pixel_of(scene, camera, point):
     """(row, column) of the pixel showing world `point`, rows counted from the bottom; None if off-screen."""
     from bpy_extras.object_utils import world_to_camera_view

@@ -1,6 +1,8 @@
 """Geometry helpers for the Blender tests: where the glass sphere's caustic lands, and which image pixels
 show a given world point. Plain numpy, so it also runs (and can be checked) outside Blender."""
 
+import math
+
 import numpy as np
 
 
@@ -57,6 +59,17 @@ def caustic_floor_points(light, center, radius, ior, floor_z=0.0, count=4000, se
     p2, d2 = p2[ok], d2[ok]
     t_floor = (floor_z - p2[:, 2]) / d2[:, 2]
     return p2 + t_floor[:, None] * d2
+
+
+def floor_ring(landing, eye, spheres):
+    """Floor points on two rings around the middle of the caustic's `landing` points, inside the box (|x|, |y| <
+    0.95), away from both (center, radius) spheres and seen from `eye`: the caustic's surroundings."""
+    focus = np.median(landing, axis=0)
+    ring = [focus + r * np.array([math.cos(a), math.sin(a), 0.0])
+            for r in (0.35, 0.45) for a in np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)]
+    ring = np.array([p for p in ring if abs(p[0]) < 0.95 and abs(p[1]) < 0.95 and all(
+        np.linalg.norm(p[:2] - np.asarray(c)[:2]) > 1.2 * r for c, r in spheres)])
+    return ring[visible_from(ring, eye, spheres)]
 
 
 def visible_from(points, eye, spheres):

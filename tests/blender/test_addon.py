@@ -104,7 +104,13 @@ def test_panels_draw(caustics_scene):
     for kind in ("POINT", "SUN", "SPOT", "AREA"):
         bpy.data.lights["Light"].type = kind
         light = bpy.data.lights["Light"]                # changing the type changes the Python class
-        draw(ui.DATA_PT_photonsplat_light, light=light)
+        # Spot cones and round area lights are rendered as they are: the panel notes nothing for them.
+        assert draw(ui.DATA_PT_photonsplat_light, light=light).labels == [], kind
         if kind == "AREA":
             light.shape = "ELLIPSE"
-            draw(ui.DATA_PT_photonsplat_light, light=light)
+            assert draw(ui.DATA_PT_photonsplat_light, light=light).labels == []
+            light.spread = 1.0                          # what the export approximates, the panel says
+            assert any("spread" in text for text in draw(ui.DATA_PT_photonsplat_light, light=light).labels)
+    from types import SimpleNamespace
+    assert not ui.DATA_PT_photonsplat_light.poll(SimpleNamespace(engine="PHOTONSPLAT", light=None))
+    assert ui.DATA_PT_photonsplat_light.poll(SimpleNamespace(engine="PHOTONSPLAT", light=light))

@@ -10,6 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
+from blender_helpers import uniform_world
 from photonsplat import export
 from photonsplat.export import materials
 
@@ -384,12 +385,7 @@ def test_no_camera_is_an_export_error(empty_scene):
 
 def test_world_background(empty_scene):
     add_camera(empty_scene)
-    world = bpy.data.worlds.new("W")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (0.5, 0.25, 1.0, 1.0)
-    background.inputs["Strength"].default_value = 2.0
-    empty_scene.world = world
+    world = uniform_world(empty_scene, (0.5, 0.25, 1.0), 2.0)
     assert approx(export_current().scene.background, (1.0, 0.5, 2.0))
     world.use_nodes = False
     world.color = (0.1, 0.2, 0.3)

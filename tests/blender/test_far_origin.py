@@ -1,11 +1,11 @@
-"""Issue 6: "the same scene translated by 1e5 giving the same image to 1e-3", through Blender.
+"""The same scene translated by 1e5 gives the same image to 1e-3, through Blender.
 
 A small scene (a floor, a cube, a glass sphere, a point light, a camera) rendered at the origin, then with every
 object and the camera moved by (1e5, -1e5, 1e5). Blender keeps matrices in float32 (locations 7.8 mm apart at
 1e5), so the scene's locations are multiples of 1/128: moved, they stay exactly what they were relative to each
 other, and any difference in the image is the renderer's. The core renders far scenes relative to a render origin
-near their geometry (native/include/photonsplat/scene.h). Two 32×32 renders of 20k photons: about 2 s; and the
-viewport's in-place moves: under a second.
+near their geometry (native/include/photonsplat/scene.h). Two 32×32 renders of 20k photons, and the viewport's
+in-place moves.
 """
 
 import bpy
@@ -53,21 +53,21 @@ def test_scene_moved_by_1e5_renders_the_same_image(empty_scene, tmp_path, core):
 
 
 def test_viewport_moves_keep_precision(empty_scene, core):
-    """The viewport moves objects in place (SceneCache: set_instance_transform, then fit_origin): moved by 1e5,
+    """The viewport moves objects in place (BlenderSync: set_instance_transform, then fit_origin): moved by 1e5,
     its core scene's render origin is the one a new export gets, so it renders as that export does."""
     from test_viewport import DepsgraphUpdates
-    from photonsplat.export.scene_cache import SceneCache
+    from photonsplat import export
 
     scene = empty_scene
     build_scene(scene)
-    cache = SceneCache()
-    cache.sync(core, bpy.context.evaluated_depsgraph_get())
-    assert cache.scene.origin == (0.0, 0.0, 0.0)
-    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    assert sync.scene.origin == (0.0, 0.0, 0.0)
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         for ob in scene.objects:
             ob.location = tuple(a + b for a, b in zip(ob.location, OFFSET))
         reports = updates.evaluate()
     assert sum(r.moved for r in reports) == 3 and not any(r.rebuilt for r in reports)
-    fresh = SceneCache()
-    fresh.sync(core, bpy.context.evaluated_depsgraph_get())
-    assert cache.scene.origin == fresh.scene.origin == OFFSET
+    fresh = export.BlenderSync(core)
+    fresh.sync(bpy.context.evaluated_depsgraph_get())
+    assert sync.scene.origin == fresh.scene.origin == OFFSET

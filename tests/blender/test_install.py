@@ -1,6 +1,6 @@
 """The add-on zip (cmake target addon_zip, build/photonsplat-<version>.zip) installs into an empty user scripts
 folder with Blender's own add-on installer and renders. A separate Blender process, so that the add-on under
-test comes from the zip only, not from build/blender. About 5 s."""
+test comes from the zip only, not from build/blender."""
 
 import os
 import subprocess

@@ -1,5 +1,5 @@
 """Final render features through Blender: render passes, render border / crop, film transparency, view layers and
-frame ranges. Tiny images (48-64 px, 20-40k photons): about 15 s in all on 2 cores."""
+frame ranges. Tiny images (48-64 px, 20-40k photons)."""
 
 import subprocess
 

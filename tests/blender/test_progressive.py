@@ -1,5 +1,5 @@
 """Progressive F12 inside Blender: scene.photonsplat.passes / time_limit reach the core, the running mean is
-shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported. ~5 s."""
+shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported."""
 import bpy
 import numpy as np
 import pytest
@@ -16,16 +16,23 @@ def test_passes_and_time_limit_are_exported(caustics_scene, core):
     assert settings.passes == 7 and settings.time_limit == 2.5
 
 
-def test_f12_renders_passes_and_shows_each(caustics_scene, monkeypatch, tmp_path, core):
-    use_photonsplat(caustics_scene, 48, 5000, passes=3)
+def count_shown_images(monkeypatch):
+    """A list that grows by one each time the engine writes an image into Blender's result (after every pass,
+    and once at the end)."""
     shown = []
     real_write = engine._write_pixels
 
-    def count_writes(result, frame, image):  # after every pass, and once at the end
+    def count_writes(result, frame, image):
         shown.append(1)
         return real_write(result, frame, image)
 
     monkeypatch.setattr(engine, "_write_pixels", count_writes)
+    return shown
+
+
+def test_f12_renders_passes_and_shows_each(caustics_scene, monkeypatch, tmp_path, core):
+    use_photonsplat(caustics_scene, 48, 5000, passes=3)
+    shown = count_shown_images(monkeypatch)
     pixels = render_pixels(tmp_path / "three_passes.exr")
     outcome = engine.last_outcome
     assert outcome.status == "finished", outcome.message
@@ -48,14 +55,7 @@ def _exported(core, scene):
 
 def test_escape_after_a_pass_keeps_the_mean(caustics_scene, monkeypatch, tmp_path, core):
     use_photonsplat(caustics_scene, 48, 5000, passes=500)
-    shown = []
-    real_write = engine._write_pixels
-
-    def count_writes(result, frame, image):  # after every pass, and once at the end
-        shown.append(1)
-        return real_write(result, frame, image)
-
-    monkeypatch.setattr(engine, "_write_pixels", count_writes)
+    shown = count_shown_images(monkeypatch)
     # Esc once two passes are on screen: pass 3 is cancelled, the mean of two is kept.
     monkeypatch.setattr(engine.PhotonSplatRenderEngine, "_cancel_requested", lambda self: len(shown) >= 2)
     pixels = render_pixels(tmp_path / "escaped.exr")

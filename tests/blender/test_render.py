@@ -11,9 +11,9 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import open_scene, pixel_of, render_pixels, use_photonsplat
+from blender_helpers import caustic_landing, open_scene, pixel_of, render_pixels, use_photonsplat
 from photonsplat import engine
-from scene_geometry import caustic_floor_points, visible_from
+from scene_geometry import floor_ring
 
 
 def luminance(rgb):
@@ -48,14 +48,8 @@ def test_caustic_under_the_glass_sphere(caustics_scene, tmp_path, core):
     brightness = luminance(pixels[..., :3])
 
     # Where the caustic is, from the scene itself: trace light through the glass sphere onto the floor.
-    glass, mirror = bpy.data.objects["GlassSphere"], bpy.data.objects["MirrorSphere"]
-    spheres = [(np.array(ob.matrix_world.translation), ob.dimensions.x / 2.0) for ob in (glass, mirror)]
-    (glass_center, radius), _ = spheres
-    ior = bpy.data.materials["Glass"].node_tree.nodes["Glass BSDF"].inputs["IOR"].default_value
-    light = np.array(bpy.data.objects["Light"].matrix_world.translation)
     eye = np.array(scene.camera.matrix_world.translation)
-    landing = caustic_floor_points(light, glass_center, radius, ior)
-    landing = landing[visible_from(landing, eye, spheres)]
+    landing, spheres = caustic_landing(eye)
     assert len(landing) > 1000, "the caustic should be visible from the camera in this scene"
 
     # Caustic pixels: those showing many of the landing points.
@@ -68,12 +62,7 @@ def test_caustic_under_the_glass_sphere(caustics_scene, tmp_path, core):
     assert caustic
 
     # Surroundings: floor points on rings around the caustic, away from both spheres and seen by the camera.
-    focus = np.median(landing, axis=0)
-    ring = [focus + r * np.array([math.cos(a), math.sin(a), 0.0])
-            for r in (0.35, 0.45) for a in np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)]
-    ring = np.array([p for p in ring if abs(p[0]) < 0.95 and abs(p[1]) < 0.95 and all(
-        np.linalg.norm(p[:2] - c[:2]) > 1.2 * r for c, r in spheres)])
-    ring = ring[visible_from(ring, eye, spheres)]
+    ring = floor_ring(landing, eye, spheres)
     around = {pixel_of(scene, scene.camera, p) for p in ring} - {None} - set(caustic)
     assert len(around) >= 10
 
@@ -238,7 +227,7 @@ class FakeEngine:
         return False
 
 
-for _name in ("render", "_render_into", "_cancel_requested", "_cancelled", "_report_warnings"):
+for _name in ("render", "_render_into", "_cancel_requested", "_cancelled"):
     setattr(FakeEngine, _name, getattr(engine.PhotonSplatRenderEngine, _name))
 
 

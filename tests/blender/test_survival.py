@@ -1,4 +1,4 @@
-"""Blender survives whatever it is handed (issue 6): malformed and extreme scenes and absurd settings end in an
+"""Blender survives whatever it is handed: malformed and extreme scenes and absurd settings end in an
 ERROR report naming the cause, never a crash, and the next valid scene renders in the same process; cancelling
 in the middle of each stage leaves no thread running and no memory growth across 20 cancelled renders.
 

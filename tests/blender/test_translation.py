@@ -1,7 +1,7 @@
 """Scene translation with the real core: textures, instancing, every object type that becomes a mesh, camera
 framing against Cycles, holdout / hidden objects, and notes for what is approximated.
 
-Images are tiny (16-64 pixels); the whole file takes about 20 s.
+Images are tiny (16-64 pixels).
 """
 
 import math
@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import render_pixels, use_photonsplat
+from blender_helpers import render_pixels, uniform_world, use_photonsplat
 from photonsplat import engine, export
 
 
@@ -22,15 +22,6 @@ def add_camera(scene, location=(0.0, 0.0, 10.0), rotation=(0.0, 0.0, 0.0), ortho
     scene.collection.objects.link(cam)
     scene.camera = cam
     return cam
-
-
-def uniform_world(scene, strength=1.0):
-    world = bpy.data.worlds.new("White")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    background.inputs["Strength"].default_value = strength
-    scene.world = world
 
 
 def material(name, shader="ShaderNodeBsdfDiffuse"):
@@ -244,8 +235,8 @@ def test_every_object_type_renders(make, instances, empty_scene, tmp_path, core)
 
 def test_hidden_camera_invisible_and_holdout_objects(empty_scene, tmp_path, core):
     """hide_render: gone. visible_camera off: unseen but still shadows. Holdout: black where seen (its alpha 0
-    is in the core's view samples, tests/native/test_translation.cpp; the final image is opaque until film
-    transparency is offered)."""
+    is in the core's view samples, tests/native/test_translation.cpp; the final image is opaque unless Film >
+    Transparent is on)."""
     add_camera(empty_scene, ortho_scale=4.0)
     bpy.ops.mesh.primitive_plane_add(size=10.0)                                  # the floor, lit by a sun
     sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", 'SUN'))

@@ -1,6 +1,6 @@
 """The viewport's machinery in blender -b (no window: drawing itself is tested under Xvfb by
-tests/window/test_viewport_window.py): the scene cache re-exports only what changed, and the background
-refinement produces an image that improves pass after pass and stops when asked. About 10 s on 2 cores."""
+tests/window/viewport_window.py): the sync kept between updates re-exports only what changed, and the background
+refinement produces an image that improves pass after pass and stops when asked."""
 
 import time
 from dataclasses import replace
@@ -9,12 +9,11 @@ import bpy
 import numpy as np
 
 from photonsplat import export, refine, viewport
-from photonsplat.export.scene_cache import SceneCache
 
 
 class RecordingCore:
     """The real core, except that every Scene it makes records the calls made on it (method names, in order):
-    what the cache did to the core scene, without changing what it renders."""
+    what the sync did to the core scene, without changing what it renders."""
 
     def __init__(self, core):
         self._core = core
@@ -46,12 +45,11 @@ class RecordingScene:
 
 
 class DepsgraphUpdates:
-    """Calls cache.sync(core, depsgraph) from depsgraph_update_post, the only place (besides view_update) where
+    """Calls sync.sync(depsgraph) from depsgraph_update_post, the only place (besides view_update) where
     depsgraph.updates lists what changed."""
 
-    def __init__(self, cache, core, release=None):
-        self.cache = cache
-        self.core = core
+    def __init__(self, sync, release=None):
+        self.sync = sync
         self.release = release
         self.reports = []
 
@@ -63,7 +61,7 @@ class DepsgraphUpdates:
         bpy.app.handlers.depsgraph_update_post.remove(self.handler)
 
     def handler(self, scene, depsgraph):
-        self.reports.append(self.cache.sync(self.core, depsgraph, release=self.release))
+        self.reports.append(self.sync.sync(depsgraph, release=self.release))
 
     def evaluate(self):
         self.reports.clear()
@@ -73,21 +71,21 @@ class DepsgraphUpdates:
 
 def test_moved_light_re_exports_lights_only(caustics_scene, core):
     recording = RecordingCore(core)
-    cache = SceneCache()
-    cache.sync(recording, bpy.context.evaluated_depsgraph_get())     # the first sync reads everything
-    meshes, lights = cache.mesh_exports, cache.light_exports
+    sync = export.BlenderSync(recording)
+    sync.sync(bpy.context.evaluated_depsgraph_get())     # the first sync reads everything
+    meshes, lights = sync.mesh_exports, sync.light_exports
     assert meshes == 3 and lights == 1         # box, glass sphere, mirror sphere; one light
-    before = cache.scene
+    before = sync.scene
     counts = (before.triangle_count, before.light_count, before.mesh_count)
 
-    with DepsgraphUpdates(cache, recording) as updates:
+    with DepsgraphUpdates(sync) as updates:
         bpy.data.objects["Light"].location.z -= 0.3
         reports = updates.evaluate()
         assert reports and any(r.lights for r in reports) and not any(r.rebuilt for r in reports)
-        assert cache.mesh_exports == meshes                        # no mesh read again
-        assert cache.light_exports > lights
+        assert sync.mesh_exports == meshes                        # no mesh read again
+        assert sync.light_exports > lights
         # The lights were replaced in the same core scene: no mesh added, no new scene.
-        assert cache.scene is before and len(recording.scenes) == 1
+        assert sync.scene is before and len(recording.scenes) == 1
         assert recording.calls("clear_lights") == 1 and recording.calls("add_mesh_data") == 3
         assert (before.triangle_count, before.light_count, before.mesh_count) == counts
 
@@ -96,74 +94,74 @@ def test_moved_light_re_exports_lights_only(caustics_scene, core):
         sphere.data.vertices[0].co.x += 0.01
         sphere.data.update()
         reports = updates.evaluate()
-        assert cache.mesh_exports == meshes + 1 and any(r.rebuilt for r in reports)
-        assert (cache.scene.mesh_count, cache.scene.light_count) == (3, 1)
+        assert sync.mesh_exports == meshes + 1 and any(r.rebuilt for r in reports)
+        assert (sync.scene.mesh_count, sync.scene.light_count) == (3, 1)
 
 
 def test_moved_object_moves_its_instance_only(caustics_scene, core):
     recording = RecordingCore(core)
-    cache = SceneCache()
-    cache.sync(recording, bpy.context.evaluated_depsgraph_get())
-    scene, meshes = cache.scene, cache.mesh_exports
+    sync = export.BlenderSync(recording)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    scene, meshes = sync.scene, sync.mesh_exports
     calls_before = list(recording.scenes[0].calls)
-    with DepsgraphUpdates(cache, recording, release=lambda: True) as updates:
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         bpy.data.objects["GlassSphere"].location.x += 0.1
         reports = updates.evaluate()
     assert sum(r.moved for r in reports) == 1 and not any(r.rebuilt or r.meshes for r in reports)
-    assert cache.scene is scene and len(recording.scenes) == 1 and cache.mesh_exports == meshes
+    assert sync.scene is scene and len(recording.scenes) == 1 and sync.mesh_exports == meshes
     new_calls = recording.scenes[0].calls[len(calls_before):]
     assert new_calls.count("set_instance_transform") == 1
     assert not {"add_mesh_data", "add_instance", "add_mesh", "add_material"} & set(new_calls)
 
 
-def test_added_and_removed_objects_rebuild_from_cached_meshes(caustics_scene, core):
+def test_added_and_removed_objects_rebuild_from_kept_meshes(caustics_scene, core):
     """A linked duplicate is one more instance of the same core mesh; deleting it drops the instance again."""
-    cache = SceneCache()
-    cache.sync(core, bpy.context.evaluated_depsgraph_get())
-    meshes, instances = cache.meshes, cache.instances
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    meshes, instances = sync.meshes, sync.instances
     sphere = bpy.data.objects["GlassSphere"]
-    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         twin = bpy.data.objects.new("Twin", sphere.data)
         twin.location = (sphere.location.x + 0.5, sphere.location.y, sphere.location.z)
         bpy.context.scene.collection.objects.link(twin)
         reports = updates.evaluate()
         assert any(r.rebuilt for r in reports)
-        assert (cache.meshes, cache.instances) == (meshes, instances + 1)
+        assert (sync.meshes, sync.instances) == (meshes, instances + 1)
         bpy.data.objects.remove(twin)
         reports = updates.evaluate()
         assert any(r.rebuilt for r in reports)
-        assert (cache.meshes, cache.instances) == (meshes, instances)
+        assert (sync.meshes, sync.instances) == (meshes, instances)
 
 
 def test_busy_scene_is_rebuilt_not_changed(caustics_scene, core):
-    """When the running render does not release the scene in time, a new scene is built (from cached arrays:
+    """When the running render does not release the scene in time, a new scene is built (from kept arrays:
     no mesh read) and the old one is left untouched for the render still using it."""
     recording = RecordingCore(core)
-    cache = SceneCache()
-    cache.sync(recording, bpy.context.evaluated_depsgraph_get())
-    old, meshes = cache.scene, cache.mesh_exports
-    with DepsgraphUpdates(cache, recording, release=lambda: False) as updates:
+    sync = export.BlenderSync(recording)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    old, meshes = sync.scene, sync.mesh_exports
+    with DepsgraphUpdates(sync, release=lambda: False) as updates:
         bpy.data.objects["Light"].location.x += 0.2
         reports = updates.evaluate()
-    assert any(r.rebuilt for r in reports) and cache.scene is not old and cache.mesh_exports == meshes
+    assert any(r.rebuilt for r in reports) and sync.scene is not old and sync.mesh_exports == meshes
     assert recording.scenes[0].calls.count("clear_lights") == 0
 
 
 def test_moved_object_renders_as_a_fresh_export(caustics_scene, core):
     """After a transform-only update (top-level BVH refit in the kept scene), the render equals that of a
     scene exported afresh from the moved objects, same seed, 40×40 pixels, one thread. Tolerance: 1e-4 per pixel
-    and channel (a refitted and a fresh BVH could order equal-distance hits differently); measured: identical."""
-    cache = SceneCache()
-    cache.sync(core, bpy.context.evaluated_depsgraph_get())
+    and channel (a refitted and a fresh BVH could order equal-distance hits differently)."""
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
     camera = viewport_camera(core, bpy.context.scene, 40, 40)
     settings = core.RenderSettings(photons=5_000, seed=3, threads=1)
-    before, _ = core.render(cache.scene, camera, settings)     # builds the BVH, so the move is a refit
-    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+    before, _ = core.render(sync.scene, camera, settings)     # builds the BVH, so the move is a refit
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         bpy.data.objects["GlassSphere"].location.x += 0.15
         bpy.data.objects["MirrorSphere"].location.y -= 0.1
         reports = updates.evaluate()
     assert sum(r.moved for r in reports) == 2 and not any(r.rebuilt for r in reports)
-    moved, _ = core.render(cache.scene, camera, settings)
+    moved, _ = core.render(sync.scene, camera, settings)
     fresh = export.export_frame(core, bpy.context.evaluated_depsgraph_get()).scene
     expected, _ = core.render(fresh, camera, settings)
     moved, expected, before = (np.asarray(a, dtype=np.float64) for a in (moved, expected, before))
@@ -175,39 +173,64 @@ def test_moved_object_renders_as_a_fresh_export(caustics_scene, core):
 
 
 def test_thousand_geometry_node_instances_are_one_core_mesh(empty_scene, core):
-    from test_translation import add_camera, points_grid_with_instances, uniform_world
+    from blender_helpers import uniform_world
+    from test_translation import add_camera, points_grid_with_instances
     grid = points_grid_with_instances(25, 40)
     add_camera(empty_scene, location=(0.0, 0.0, 30.0))
     uniform_world(empty_scene)
     recording = RecordingCore(core)
-    cache = SceneCache()
-    report = cache.sync(recording, bpy.context.evaluated_depsgraph_get())
+    sync = export.BlenderSync(recording)
+    report = sync.sync(bpy.context.evaluated_depsgraph_get())
     # Two meshes read from Blender: the sphere (once for 1000 instances) and the grid's own evaluated mesh,
     # which has no faces left (the points became instances) and so is no core mesh.
-    assert report.meshes == 2 and cache.mesh_exports == 2
-    assert (cache.meshes, cache.instances) == (1, 1000)
-    assert cache.scene.stored_triangle_count == 320 and cache.scene.triangle_count == 320_000
+    assert report.meshes == 2 and sync.mesh_exports == 2
+    assert (sync.meshes, sync.instances) == (1, 1000)
+    assert sync.scene.stored_triangle_count == 320 and sync.scene.triangle_count == 320_000
     # Moving the instancer moves the 1000 instances in place: no mesh read, no new scene.
-    with DepsgraphUpdates(cache, recording, release=lambda: True) as updates:
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         grid.location.z += 1.0
         reports = updates.evaluate()
     assert sum(r.moved for r in reports) == 1000 and not any(r.rebuilt for r in reports)
-    assert cache.mesh_exports == 2 and len(recording.scenes) == 1
+    assert sync.mesh_exports == 2 and len(recording.scenes) == 1
     assert recording.calls("add_mesh_data") == 1 and recording.calls("set_instance_transform") == 1000
 
 
 class FakeEngine:
-    """What ViewportSession needs of a RenderEngine outside view_draw: redraw requests (counted)."""
+    """What ViewportSession needs of a RenderEngine outside view_draw: redraw requests (counted), reports."""
 
     def __init__(self):
         self.redraws = 0
+        self.reports = []
 
     def tag_redraw(self):
         self.redraws += 1
 
+    def report(self, kind, message):
+        self.reports.append(message)
+
+
+def test_viewport_reports_the_notes_of_a_final_render(empty_scene, core):
+    """One sync, one list of notes: an unsupported object and a scene without light are reported by the viewport
+    as the final render reports them, once until they change."""
+    from test_translation import add_camera
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    empty_scene.collection.objects.link(bpy.data.objects.new("Fog", bpy.data.volumes.new("Fog")))
+    session = viewport.ViewportSession(core)
+    engine = FakeEngine()
+    session.update(engine, bpy.context.evaluated_depsgraph_get())
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    assert any("volume objects are not supported" in w for w in frame.warnings)
+    assert any("no lights" in w for w in frame.warnings)
+    assert session.warnings == frame.warnings
+    assert engine.reports == export.warning_lines(frame.warnings)
+    session.update(engine, bpy.context.evaluated_depsgraph_get())
+    assert engine.reports == export.warning_lines(frame.warnings)      # unchanged: not reported again
+    session.stop()
+
 
 def test_session_stops_its_refinement_before_moving_an_instance(caustics_scene, core):
-    """view_update with a refinement running: the session stops it (joins) before the cache changes the
+    """view_update with a refinement running: the session stops it (joins) before the sync changes the
     core scene in place, then starts a new one on the same, updated scene."""
     session = viewport.ViewportSession(core)
     engine = FakeEngine()
@@ -241,15 +264,15 @@ def test_session_stops_its_refinement_before_moving_an_instance(caustics_scene, 
 
 
 def test_moved_light_changes_the_rendered_image(caustics_scene, core):
-    cache = SceneCache()
-    cache.sync(core, bpy.context.evaluated_depsgraph_get())
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
     camera = viewport_camera(core, bpy.context.scene, 48, 48)
     settings = core.RenderSettings(photons=5_000, seed=1)
-    first, _ = core.render(cache.scene, camera, settings)
-    with DepsgraphUpdates(cache, core, release=lambda: True) as updates:
+    first, _ = core.render(sync.scene, camera, settings)
+    with DepsgraphUpdates(sync, release=lambda: True) as updates:
         bpy.data.objects["Light"].location.x += 0.5
         updates.evaluate()
-    second, _ = core.render(cache.scene, camera, settings)
+    second, _ = core.render(sync.scene, camera, settings)
     assert np.abs(np.asarray(first) - np.asarray(second)).max() > 0.01
 
 
@@ -263,8 +286,8 @@ def viewport_camera(core, scene, width, height):
 
 
 def refinement_for(core, width=48, height=48, **limits):
-    cache = SceneCache()
-    cache.sync(core, bpy.context.evaluated_depsgraph_get())
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
     scene = bpy.context.scene
     settings = viewport.refine_settings(core, scene)
     settings = replace(settings, **limits)
@@ -273,7 +296,7 @@ def refinement_for(core, width=48, height=48, **limits):
     make_camera = viewport.view_camera_factory(core, cam.matrix_world.normalized().inverted(),
                                                cam.calc_matrix_camera(depsgraph, x=width, y=height))
     frames = []
-    return refine.Refinement(core, cache.scene, make_camera, width, height, settings,
+    return refine.Refinement(core, sync.scene, make_camera, width, height, settings,
                              on_frame=frames.append), frames
 
 

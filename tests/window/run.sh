@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The real-window test (tests/window/viewport_window.py) under Xvfb with software OpenGL: Blender opens the
 # caustic Cornell box, renders it in a Rendered viewport and checks the screenshot. Fails on a non-zero exit
-# or on any Python error in Blender's log. About 40 s. Screenshot and log land in build/test-artifacts/.
+# or on any Python error in Blender's log. Screenshot and log land in build/test-artifacts/.
 # PHOTONSPLAT_DOC_IMAGES=docs/images also retakes the user guide's screenshots.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"

@@ -7,7 +7,6 @@ given as PHOTONSPLAT_ARTIFACTS (default build/test-artifacts): viewport_caustic.
 with PHOTONSPLAT_DOC_IMAGES=<folder>, the user guide's screenshots (window, render and view-layer panels).
 """
 
-import math
 import os
 import shutil
 import sys
@@ -21,7 +20,8 @@ REPO = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(REPO / "tools"), str(REPO / "tests" / "blender")]
 
 import blender_window as bw                                       # noqa: E402
-from scene_geometry import caustic_floor_points, visible_from     # noqa: E402
+from blender_helpers import caustic_landing                         # noqa: E402
+from scene_geometry import floor_ring                             # noqa: E402
 
 ARTIFACTS = Path(os.environ.get("PHOTONSPLAT_ARTIFACTS", REPO / "build" / "test-artifacts"))
 DOC_IMAGES = os.environ.get("PHOTONSPLAT_DOC_IMAGES")
@@ -34,14 +34,8 @@ def luminance(rgb):
 
 def caustic_and_surroundings(scene, region, region_data):
     """Region pixels (column, row from top) showing the glass sphere's caustic, and floor pixels around it."""
-    glass, mirror = bpy.data.objects["GlassSphere"], bpy.data.objects["MirrorSphere"]
-    spheres = [(np.array(ob.matrix_world.translation), ob.dimensions.x / 2.0) for ob in (glass, mirror)]
-    (center, radius), _ = spheres
-    ior = bpy.data.materials["Glass"].node_tree.nodes["Glass BSDF"].inputs["IOR"].default_value
-    light = np.array(bpy.data.objects["Light"].matrix_world.translation)
     eye = np.array(region_data.view_matrix.inverted().translation)
-    landing = caustic_floor_points(light, center, radius, ior)
-    landing = landing[visible_from(landing, eye, spheres)]
+    landing, spheres = caustic_landing(eye)
     counts = {}
     for pixel in bw.region_pixels(region, region_data, landing):
         if pixel is not None:
@@ -49,12 +43,7 @@ def caustic_and_surroundings(scene, region, region_data):
     # The caustic's core: the pixels showing the most landing points.
     threshold = np.percentile(list(counts.values()), 90)
     caustic = [p for p, n in counts.items() if n >= threshold]
-    focus = np.median(landing, axis=0)
-    ring = [focus + r * np.array([math.cos(a), math.sin(a), 0.0])
-            for r in (0.35, 0.45) for a in np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)]
-    ring = np.array([p for p in ring if abs(p[0]) < 0.95 and abs(p[1]) < 0.95 and all(
-        np.linalg.norm(p[:2] - c[:2]) > 1.2 * r for c, r in spheres)])
-    ring = ring[visible_from(ring, eye, spheres)]
+    ring = floor_ring(landing, eye, spheres)
     around = [p for p in bw.region_pixels(region, region_data, ring) if p is not None and p not in counts]
     return caustic, around
 

@@ -1,6 +1,5 @@
-"""How Blender's object instances become core meshes, instances and materials: shared by the final render's
-one-shot export (export_frame) and the viewport's scene cache (scene_cache.py), so that both key meshes,
-map materials and word their notes the same way.
+"""How Blender's object instances become core meshes, instances and materials, for the sync (sync.py) that
+serves the final render and the viewport alike.
 
 Every entry of depsgraph.object_instances becomes a Placement (plain data, read while the instance is valid:
 an instance object lives only during its own iteration step). GeometryTable adds each distinct mesh to a core

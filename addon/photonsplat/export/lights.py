@@ -1,7 +1,7 @@
 """Blender lights -> the core's lights, converting Cycles 3.4's units into radiometric ones.
 
-The core takes physical quantities; Blender's light settings follow Cycles' conventions, measured on Cycles 3.4
-(docs/design.md section 7). With colour c and Power/Strength P:
+The core takes physical quantities; Blender's light settings follow Cycles 3.4's conventions. With colour c and
+Power/Strength P:
   point  isotropic intensity I = c P / (4 pi)  [W/sr]; radius = Radius (soft shadows)
   spot   the same intensity on the axis, with Cycles 3.4's falloff I(θ) = I cos θ smoothstep(...) inside the cone
          of full angle Spot Size, softened by Blend (the core's spot light); radius as for point lights
@@ -14,7 +14,7 @@ The core takes physical quantities; Blender's light settings follow Cycles' conv
 
 import math
 
-from mathutils import Vector
+from mathutils import Matrix, Vector
 
 from . import materials
 
@@ -93,3 +93,18 @@ def _emitted_color(light, notes):
     strength = materials.float_input(node, "Strength", found)
     notes.extend(f"Light '{light.name}': {n}" for n in found)
     return tuple(c * t * strength for c, t in zip(color, tint))
+
+
+def conversion_notes(light):
+    """What the export approximates or skips of `light` (bpy.types.Light) placed without scale, one line each:
+    what the light panel shows."""
+    notes = []
+    export_light(_NoScene(), light.name, light, Matrix.Identity(4), notes)
+    return notes
+
+
+class _NoScene:
+    """Takes the add_*_light calls of export_light and keeps nothing."""
+
+    def __getattr__(self, method):
+        return lambda **kwargs: None

@@ -10,7 +10,7 @@ and every surface may also emit radiance `emission` (W/(sr m^2), both faces, as 
 
 We read the node tree Cycles would render (get_output_node('CYCLES')) and map the shader plugged into the
 Surface input. Whatever cannot be represented exactly is replaced by the nearest supported surface, and a
-note says so; export/__init__.py turns the notes into one warning per material in the render report.
+note says so; the sync (export/sync.py) turns the notes into one warning per material in its report.
 
 Known approximations that are NOT warned about, because they apply to nearly every material:
   - Principled BSDF's dielectric specular layer (Specular input, about 4 % reflectance) is dropped, and its
@@ -236,22 +236,31 @@ def _glossy(node, name):
         spec = MaterialSpec(name=name, kind="mirror", color=color)
     else:
         spec = _metal(name, color, roughness)
-    spec.texture = texture
     if spec.kind == "glossy":
         _note_distribution(notes, distribution)
-    if node.bl_idname == "ShaderNodeBsdfAnisotropic":
-        notes.append("anisotropy ignored")
-    spec.notes = notes
-    return spec
+    return _finish_node(spec, node, texture, notes)
 
 
 def _glass(node, name):
     notes = []
     color, texture = color_or_texture(node, "Color", notes)
-    spec = MaterialSpec(name=name, kind="glass", color=color, ior=float_input(node, "IOR", notes), texture=texture)
+    spec = MaterialSpec(name=name, kind="glass", color=color, ior=float_input(node, "IOR", notes))
     _note_rough(notes, float_input(node, "Roughness", notes))
-    if node.bl_idname == "ShaderNodeBsdfRefraction":
-        notes.append("Refraction BSDF rendered as glass (with Fresnel reflection)")
+    return _finish_node(spec, node, texture, notes)
+
+
+# Nodes converted as a kin of theirs, and what that leaves out.
+_KIN_NOTES = {
+    "ShaderNodeBsdfAnisotropic": "anisotropy ignored",
+    "ShaderNodeBsdfRefraction": "Refraction BSDF rendered as glass (with Fresnel reflection)",
+}
+
+
+def _finish_node(spec, node, texture, notes):
+    """`spec` with the texture of its Color input and its notes, the note of a kin node last."""
+    spec.texture = texture
+    if node.bl_idname in _KIN_NOTES:
+        notes.append(_KIN_NOTES[node.bl_idname])
     spec.notes = notes
     return spec
 

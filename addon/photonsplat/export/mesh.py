@@ -2,7 +2,7 @@
 
 Everything goes through numpy and foreach_get (no Python loop over vertices or faces): a million triangles
 take a fraction of a second. Meshes are exported in object space, once per distinct evaluated mesh; every
-object or instance showing it becomes a core instance with its own world matrix (export/__init__.py).
+object or instance showing it becomes a core instance with its own world matrix (export/sync.py).
 """
 
 from dataclasses import dataclass
