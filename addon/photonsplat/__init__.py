@@ -29,6 +29,7 @@ try:
         Cancelled,
         Progressive,
         RenderSettings,
+        SETTINGS,
         Scene,
         RELMSE_EPSILON,
         automatic_radius,
