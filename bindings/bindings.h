@@ -5,6 +5,7 @@
 
 namespace ps_py {
 
+void bind_settings(pybind11::module_& m);     // settings.cpp: RenderSettings and SETTINGS, from the settings table
 void bind_images(pybind11::module_& m);       // images.cpp: write_image
 void bind_metrics(pybind11::module_& m);      // metrics.cpp: psnr, ssim, rmse, relmse
 void bind_reference(pybind11::module_& m);    // reference.cpp: render_reference

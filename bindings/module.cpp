@@ -6,7 +6,6 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <sstream>
 #include <string>
 
 #include "arrays.h"
@@ -24,44 +23,6 @@ using namespace pybind11::literals;
 using namespace ps_py;
 
 namespace {
-
-// Python ints of any sign reach the core's unsigned pass count only through here, so -1 is named, not wrapped.
-uint32_t iteration_count(int64_t passes) {
-    if (passes < 0 || passes > 1'000'000)
-        throw ps::InvalidInput("passes", "must be in [0, 1000000] (0 = until time_limit), got " + std::to_string(passes));
-    return static_cast<uint32_t>(passes);
-}
-
-ps::RenderSettings make_settings(uint64_t photons, float radius, const std::string& method, int max_bounces,
-                                 uint64_t seed, int threads, int direct_samples, float normal_tolerance,
-                                 float plane_distance, const std::string& kernel, int directional_level,
-                                 int64_t passes, double time_limit, float alpha, bool guide_photons,
-                                 bool caustics_pass, bool transparent,
-                                 uint64_t memory_budget, float aimed_photons, bool boundary_correction) {
-    ps::RenderSettings s;
-    s.photons = photons;
-    s.radius = radius;
-    s.method = ps::splat_method_from_string(method);
-    s.max_bounces = max_bounces;
-    s.seed = seed;
-    s.threads = threads;
-    s.direct_samples = direct_samples;
-    s.normal_tolerance = normal_tolerance;
-    s.plane_distance = plane_distance;
-    s.kernel = ps::kernel_from_string(kernel);
-    s.directional_level = directional_level;
-    s.memory_budget = memory_budget;
-    s.iterations = iteration_count(passes);
-    s.time_limit = time_limit;
-    s.alpha = alpha;
-    s.guide_photons = guide_photons;
-    s.caustics_pass = caustics_pass;
-    s.transparent = transparent;
-    s.aimed_photons = aimed_photons;
-    s.boundary_correction = boundary_correction;
-    ps::validate(s);
-    return s;
-}
 
 // Renders one frame off the GIL (see background.h); returns (image, stats[, passes]). Without passes only the
 // combined image is made: the film holds no other output, and no caustic splat is run.
@@ -87,6 +48,7 @@ PYBIND11_MODULE(_core, m) {
     m.attr("__version__") = "0.1.0";
     m.attr("METHODS") = py::tuple(py::cast(ps::splat_method_names()));
     m.attr("KERNELS") = py::make_tuple("uniform", "epanechnikov");
+    m.attr("FILM_OUTPUTS") = py::tuple(py::cast(ps::film_output_names(ps::kAllFilmOutputs)));
 
     static py::exception<ps::Cancelled> cancelled(m, "Cancelled", PyExc_RuntimeError);
     py::register_exception_translator([](std::exception_ptr p) {
@@ -191,65 +153,7 @@ PYBIND11_MODULE(_core, m) {
         .def_property_readonly("height", &ps::Camera::height)
         .def_property_readonly("orthographic", &ps::Camera::orthographic);
 
-    py::class_<ps::RenderSettings>(m, "RenderSettings", "Settings of one render; validated on construction.")
-        .def(py::init(&make_settings), "photons"_a = 200000, "radius"_a = 0.0f, "method"_a = "cluster_cone",
-             "max_bounces"_a = 8, "seed"_a = 0, "threads"_a = 0, "direct_samples"_a = 4, "normal_tolerance"_a = 60.0f,
-             "plane_distance"_a = 0.0f, "kernel"_a = "uniform", "directional_level"_a = -1, "passes"_a = 1,
-             "time_limit"_a = 0.0, "alpha"_a = 2.0f / 3.0f, "guide_photons"_a = true, "caustics_pass"_a = false,
-             "transparent"_a = false, "memory_budget"_a = 0, "aimed_photons"_a = ps::RenderSettings().aimed_photons,
-             "boundary_correction"_a = true)
-        .def_readwrite("photons", &ps::RenderSettings::photons)
-        .def_readwrite("radius", &ps::RenderSettings::radius)
-        .def_property(
-            "method", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.method)); },
-            [](ps::RenderSettings& s, const std::string& v) { s.method = ps::splat_method_from_string(v); })
-        .def_readwrite("max_bounces", &ps::RenderSettings::max_bounces)
-        .def_readwrite("seed", &ps::RenderSettings::seed)
-        .def_readwrite("threads", &ps::RenderSettings::threads)
-        .def_readwrite("direct_samples", &ps::RenderSettings::direct_samples)
-        .def_readwrite("normal_tolerance", &ps::RenderSettings::normal_tolerance)
-        .def_readwrite("plane_distance", &ps::RenderSettings::plane_distance)
-        .def_property(
-            "kernel", [](const ps::RenderSettings& s) { return std::string(ps::to_string(s.kernel)); },
-            [](ps::RenderSettings& s, const std::string& v) { s.kernel = ps::kernel_from_string(v); })
-        .def_readwrite("directional_level", &ps::RenderSettings::directional_level)
-        .def_readwrite("memory_budget", &ps::RenderSettings::memory_budget,
-                       "bytes the render may hold; 0 = 3/4 of this machine's (or container's) memory")
-        .def_property(
-            "passes", [](const ps::RenderSettings& s) { return s.iterations; },
-            [](ps::RenderSettings& s, int64_t v) { s.iterations = iteration_count(v); },
-            "Progressive passes; 1 = the one-shot method, 0 = until time_limit")
-        .def_readwrite("time_limit", &ps::RenderSettings::time_limit,
-                       "Seconds of progressive rendering; 0 = none. A pass predicted to end past it is not started")
-        .def_readwrite("alpha", &ps::RenderSettings::alpha,
-                       "Radius shrink of progressive passes: r_i^2 = r_(i-1)^2 (i-1+alpha)/i, in (0, 1]")
-        .def_readwrite("guide_photons", &ps::RenderSettings::guide_photons,
-                       "Emit sun photons where pilot paths found them stored; unbiased (default True)")
-        .def_readwrite("aimed_photons", &ps::RenderSettings::aimed_photons,
-                       "Extra photons per pass aimed at mirror and glass objects (point, spot and area lights), as a "
-                       "fraction of photons; they add caustic photons only, weighted so the image stays unbiased. "
-                       "0 = off.")
-        .def_readwrite("boundary_correction", &ps::RenderSettings::boundary_correction,
-                       "Divide each view sample's splatted light by the part of its kernel disc that lies on a "
-                       "like-facing surface: corners, edges and thin parts lose no light to the kernel (default True; glossy "
-                       "samples and directional's approximate passes are left as they are)")
-        .def_readwrite("caustics_pass", &ps::RenderSettings::caustics_pass,
-                       "Also splat the caustic photons (light -> specular+ -> diffuse) alone: passes['caustics']")
-        .def_readwrite("transparent", &ps::RenderSettings::transparent,
-                       "Film transparency: alpha 0 and no background where camera rays escape to the world")
-        .def("__repr__", [](const ps::RenderSettings& s) {
-            std::ostringstream o;
-            o << "RenderSettings(photons=" << s.photons << ", radius=" << s.radius << ", method='"
-              << ps::to_string(s.method) << "', max_bounces=" << s.max_bounces << ", seed=" << s.seed
-              << ", threads=" << s.threads << ", direct_samples=" << s.direct_samples << ", kernel='"
-              << ps::to_string(s.kernel) << "', directional_level=" << s.directional_level
-              << ", passes=" << s.iterations << ", time_limit=" << s.time_limit << ", alpha=" << s.alpha
-              << ", guide_photons=" << (s.guide_photons ? "True" : "False") << ", aimed_photons=" << s.aimed_photons
-              << ", boundary_correction=" << (s.boundary_correction ? "True" : "False")
-              << ", caustics_pass=" << (s.caustics_pass ? "True" : "False")
-              << ", transparent=" << (s.transparent ? "True" : "False") << ", memory_budget=" << s.memory_budget << ")";
-            return o.str();
-        });
+    bind_settings(m);  // before render(), whose default settings it needs
 
     m.def("render", &render, "scene"_a, "camera"_a, "settings"_a = ps::RenderSettings(), "progress"_a = py::none(),
           "passes"_a = false,

@@ -222,11 +222,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const RenderSettings settings = make_settings(in);
         RenderControl control;
         const RenderResult result = render(scene, camera, settings, control);
-        for (size_t i = 0; i < result.rgba.size(); ++i) {
-            if (!std::isfinite(result.rgba[i])) {
+        const std::vector<float>& rgba = result.rgba();
+        for (size_t i = 0; i < rgba.size(); ++i) {
+            if (!std::isfinite(rgba[i])) {
                 const size_t p = i / 4, c = std::min<size_t>(i % 4, 2);
                 std::fprintf(stderr, "non-finite pixel %zu from an accepted render: emission %g direct %g indirect %g\n",
-                             p, result.emission[3 * p + c], result.direct[3 * p + c], result.indirect[3 * p + c]);
+                             p, result.film[FilmOutput::emission][3 * p + c], result.film[FilmOutput::direct][3 * p + c],
+                             result.film[FilmOutput::indirect][3 * p + c]);
                 describe(scene, camera, settings);
                 std::abort();
             }

@@ -83,9 +83,9 @@ def main(argv):
         image = progressive.image()
         ssim = float(core.ssim(image, reference))
         mean_ratio = float(image[..., :3].mean() / reference[..., :3].mean())
-        print(f"diagnosis: pass {progressive.passes_done} cpu {spent:.3f} s wall {progressive.elapsed:.3f} s "
+        print(f"diagnosis: pass {progressive.iterations_done} cpu {spent:.3f} s wall {progressive.elapsed:.3f} s "
               f"SSIM {ssim:.4f} mean ratio {mean_ratio:.4f}", flush=True)
-        if args.split and progressive.passes_done == args.split:
+        if args.split and progressive.iterations_done == args.split:
             saved.update({f"early_{k}": v for k, v in progressive.passes().items()})
     stats = progressive.stats()
     print("diagnosis: seconds", {k: round(v, 3) for k, v in sorted(stats["seconds"].items())})

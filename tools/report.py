@@ -145,7 +145,7 @@ def measure_scene(args):
     for photons in TABLE_PHOTONS:
         for method in TABLE_METHODS:
             settings = frame.settings
-            settings.photons, settings.method, settings.radius, settings.passes = photons, method, 0.0, 1
+            settings.photons, settings.method, settings.radius, settings.iterations = photons, method, 0.0, 1
             started = time.perf_counter()
             image, stats = core.render(frame.scene, frame.camera, settings)
             wall = time.perf_counter() - started
@@ -163,13 +163,13 @@ def measure_scene(args):
             budget = max(args.seconds, 2 * args.seconds)
         settings = frame.settings
         settings.photons, settings.method, settings.radius = args.progressive_photons, method, 0.0
-        settings.passes, settings.time_limit = 0, budget
+        settings.iterations, settings.time_limit = 0, budget
         progressive = core.Progressive(frame.scene, frame.camera, settings)
         curve, taken = [], set()
         while not progressive.finished:
             progressive.step()
             image = progressive.image()
-            point = {"method": method, "pass": progressive.passes_done, "seconds": progressive.elapsed,
+            point = {"method": method, "pass": progressive.iterations_done, "seconds": progressive.elapsed,
                      "radius": progressive.radius, **metrics(core, image, reference)}
             curve.append(point)
             if method == "cluster_cone":
@@ -220,10 +220,10 @@ def reference_image(core, frame, name, blend, caustic, args):
         # is not independent of the methods measured; the report says so.
         settings = frame.settings
         settings.method, settings.photons, settings.radius = "cluster_cone", 200_000, 0.0
-        settings.passes, settings.time_limit = 0, args.reference_seconds
+        settings.iterations, settings.time_limit = 0, args.reference_seconds
         image, stats = core.render(frame.scene, frame.camera, settings)
         info = {"kind": "progressive cluster_cone (render_reference unavailable: not independent)",
-                "samples": stats["values"]["passes"]}
+                "samples": stats["values"]["iterations"]}
     info["seconds"] = time.perf_counter() - started
     np.save(path, image)
     core.write_image(str(cache / f"{key}.exr"), image)

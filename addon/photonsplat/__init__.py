@@ -23,12 +23,14 @@ bl_info = {
 # registers and says why in its panel, instead of failing to enable.
 try:
     from ._core import (  # noqa: F401  (re-exported scripting API)
+        FILM_OUTPUTS,
         KERNELS,
         METHODS,
         Camera,
         Cancelled,
         Progressive,
         RenderSettings,
+        SETTINGS,
         Scene,
         RELMSE_EPSILON,
         automatic_radius,

@@ -125,6 +125,7 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         view_layer = depsgraph.view_layer
         frame.settings.transparent = depsgraph.scene.render.film_transparent
         frame.settings.caustics_pass = view_layer.photonsplat.use_pass_caustics
+        frame.settings.outputs = passes.film_outputs(view_layer)
         outcome.warnings = frame.warnings
         for line in export.warning_lines(frame.warnings):
             self.report({'WARNING'}, line)
@@ -154,11 +155,12 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
         self.update_stats("", f"Photon Splat | {outcome.message}")
 
     def _render_passes(self, core, frame, result, on_progress, components):
-        """(image, stats, per-pass images or None). One pass: core.render. Progressive (passes != 1): one pass at
-        a time, the running mean shown after each; Esc after the first pass keeps the mean so far (stats values
-        'cancelled' = 1). `components`: whether the render passes beyond Combined are wanted."""
+        """(image, stats, per-pass images or None). One iteration: core.render. Progressive (iterations != 1):
+        one iteration at a time, the running mean shown after each; Esc after the first iteration keeps the mean
+        so far (stats values 'cancelled' = 1). `components`: whether the render passes beyond Combined are
+        wanted."""
         _check_result_size(result, frame)
-        if frame.settings.passes == 1:
+        if frame.settings.iterations == 1:
             if components:
                 return core.render(frame.scene, frame.camera, frame.settings, progress=on_progress, passes=True)
             return (*core.render(frame.scene, frame.camera, frame.settings, progress=on_progress), None)
@@ -168,13 +170,13 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
             try:
                 progressive.step(progress=on_progress)
             except core.Cancelled:
-                if progressive.passes_done == 0:
+                if progressive.iterations_done == 0:
                     raise
                 cancelled = True
             else:
                 _write_pixels(result, frame, progressive.image())
                 self.update_result(result)
-                # A pass shorter than the core's progress poll (0.1 s) never asks: ask between passes too.
+                # An iteration shorter than the core's progress poll (0.1 s) never asks: ask between them too.
                 cancelled = self._cancel_requested()
         stats = progressive.stats()
         if cancelled:
@@ -225,9 +227,9 @@ def _summary(frame, stats, photons):
     text = f"{photons:,} photons | {frame.triangles:,} triangles | {frame.lights} lights"
     if "radius" in values:
         text += f" | radius {values['radius']:.4g}"
-    passes = int(values.get("passes", 1))
-    if passes != 1 or frame.settings.passes != 1:
-        text += f" | {passes} passes" + (" (stopped by Esc)" if values.get("cancelled") else "")
+    iterations = int(values.get("iterations", 1))
+    if iterations != 1 or frame.settings.iterations != 1:
+        text += f" | {iterations} iterations" + (" (stopped by Esc)" if values.get("cancelled") else "")
         if "final_radius" in values:
             text += f", final radius {values['final_radius']:.4g}"
     return text + f" | {total:.2f} s"

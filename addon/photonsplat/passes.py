@@ -17,7 +17,7 @@ class RenderPass:
     name: str          # the pass name in the render result and on the compositor's Render Layers node
     channel_ids: str   # one letter per channel, as Blender names them
     kind: str          # 'COLOR' | 'VECTOR' | 'VALUE'
-    source: str        # key of the core's passes dict; "" for Combined, the image itself
+    source: str        # the core's film output (photonsplat.FILM_OUTPUTS) it shows; "" for Combined itself
 
     def enabled(self, view_layer):
         return _ENABLED[self.name](view_layer)
@@ -47,6 +47,12 @@ _ENABLED = {
 
 def enabled_passes(view_layer):
     return [p for p in PASSES if p.enabled(view_layer)]
+
+
+def film_outputs(view_layer):
+    """The core film outputs (RenderSettings.outputs) a render of this view layer needs: only the enabled passes
+    are made, and held while a progressive render averages them."""
+    return ("combined", *(p.source for p in enabled_passes(view_layer) if p.source))
 
 
 def register_passes(engine, scene, view_layer):

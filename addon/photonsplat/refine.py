@@ -35,20 +35,20 @@ class Frame:
 
 def first_image(core, scene, camera, settings, progress):
     """The fast image answering a change: few photons, one pass (the caller gives a reduced-size camera)."""
-    fields = dict(settings.render, photons=settings.preview_photons, passes=1, time_limit=0.0)
+    fields = dict(settings.render, photons=settings.preview_photons, iterations=1, time_limit=0.0)
     image, _ = core.render(scene, camera, core.RenderSettings(**fields), progress=progress)
     return np.asarray(image, dtype=np.float32)
 
 
-# The core's own bound on progressive passes (RenderSettings.passes); our loop stops by itself before it.
-MAX_CORE_PASSES = 1_000_000
+# The core's own bound on progressive iterations (RenderSettings.iterations); our loop stops by itself before it.
+MAX_CORE_ITERATIONS = 1_000_000
 
 
 def refined_images(core, scene, camera, settings, progress):
     """Yields the running mean after each refinement pass, forever (the caller stops): the core's progressive
     render, whose passes trace new photons with a shrinking radius, so the mean converges to the exact image."""
     fields = dict(settings.render, photons=settings.photons_per_pass, time_limit=0.0,
-                  passes=settings.max_passes or MAX_CORE_PASSES)
+                  iterations=settings.max_passes or MAX_CORE_ITERATIONS)
     progressive = core.Progressive(scene, camera, core.RenderSettings(**fields))
     while True:
         progressive.step(progress=progress)

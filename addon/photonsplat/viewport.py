@@ -40,11 +40,11 @@ def stop_all(wait=1.0):
 
 def refine_settings(core, scene):
     """scene.photonsplat -> RefineSettings of the viewport (read on the main thread; the worker gets a copy).
-    The render fields are the final render's, but for the photon count; the refinement sets its own passes
-    and time limit."""
+    The render fields are the final render's, but for the photon count and the film, of which the viewport shows
+    only the combined image; the refinement sets its own iterations and time limit."""
     props = scene.photonsplat
-    render = dict(export.render_settings_kwargs(props), photons=props.viewport_photons, passes=1, time_limit=0.0,
-                  transparent=scene.render.film_transparent)
+    render = dict(export.render_settings_kwargs(props), photons=props.viewport_photons, iterations=1,
+                  time_limit=0.0, outputs=("combined",), transparent=scene.render.film_transparent)
     core.RenderSettings(**render)       # validate now: a bad value is reported, not raised in the thread
     return refine.RefineSettings(render=render, preview_photons=props.viewport_preview_photons,
                                  preview_divider=props.viewport_preview_divider,

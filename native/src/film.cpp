@@ -40,6 +40,19 @@ FilmOutput film_output_from_string(const std::string& name) {
     throw InvalidInput("outputs", "'" + name + "' is not one of: " + known);
 }
 
+std::vector<std::string> film_output_names(FilmOutputSet set) {
+    std::vector<std::string> names;
+    for (const FilmOutputInfo& info : film_outputs())
+        if (contains(set, info.output)) names.emplace_back(info.name);
+    return names;
+}
+
+FilmOutputSet film_output_set(const std::vector<std::string>& names) {
+    FilmOutputSet set{};
+    for (const std::string& name : names) set |= film_bit(film_output_from_string(name));
+    return set;
+}
+
 Film::Film(int width, int height, FilmOutputSet outputs)
     : width_(width), height_(height), outputs_(with_combined(outputs)) {
     for (const FilmOutputInfo& info : film_outputs())
@@ -58,7 +71,7 @@ FilmAccumulator::FilmAccumulator(int width, int height, FilmOutputSet outputs)
 void FilmAccumulator::add(const Film& iteration) {
     const size_t pixels = pixel_count(width_, height_);
     for (const FilmOutputInfo& info : film_outputs()) {
-        if (!(outputs_ & film_bit(info.output))) continue;
+        if (!contains(outputs_, info.output)) continue;
         const std::vector<float>& image = iteration[info.output];
         if (!info.averaged) {
             if (count_ == 0) first_[static_cast<size_t>(info.output)] = image;
@@ -73,7 +86,7 @@ void FilmAccumulator::add(const Film& iteration) {
 
 std::vector<float> FilmAccumulator::mean(FilmOutput output) const {
     const FilmOutputInfo& info = film_output_info(output);
-    if (count_ == 0 || !(outputs_ & film_bit(output))) return {};
+    if (count_ == 0 || !contains(outputs_, output)) return {};
     if (!info.averaged) return first_[static_cast<size_t>(output)];
     const std::vector<double>& sum = sums_[static_cast<size_t>(output)];
     std::vector<float> mean(sum.size());
@@ -100,7 +113,7 @@ size_t FilmAccumulator::bytes() const {
 double FilmAccumulator::bytes_per_pixel(FilmOutputSet outputs) {
     double bytes = 0.0;
     for (const FilmOutputInfo& info : film_outputs())
-        if (with_combined(outputs) & film_bit(info.output))
+        if (contains(with_combined(outputs), info.output))
             bytes += info.channels * double(info.averaged ? sizeof(double) : sizeof(float));
     return bytes;
 }

@@ -121,9 +121,9 @@ double predict_image_bytes(int width, int height, FilmOutputSet outputs) {
     outputs |= film_bit(FilmOutput::combined);
     double floats = 0.0;
     for (const FilmOutputInfo& info : film_outputs())
-        if (outputs & film_bit(info.output)) floats += info.channels;
+        if (contains(outputs, info.output)) floats += info.channels;
     for (FilmOutput part : {FilmOutput::emission, FilmOutput::direct, FilmOutput::indirect})
-        if (!(outputs & film_bit(part))) floats += 3;
+        if (!contains(outputs, part)) floats += 3;
     return double(width) * double(height) * floats * sizeof(float);
 }
 
@@ -196,7 +196,7 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     if (settings.boundary_correction)  // with the index of each pixel's first sample (samples = pixels here)
         budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples) + double(samples) * sizeof(uint32_t),
                        "resolution");
-    if (requested_outputs(settings) & film_bit(FilmOutput::caustics)) {
+    if (contains(requested_outputs(settings), FilmOutput::caustics)) {
         // The caustic photons copied out of the map, and their own splat's light.
         budget.reserve("caustic_photons", photon_map, "photons");
         budget.reserve("caustic_light", predict_per_sample_light_bytes(samples), "resolution");
@@ -219,7 +219,7 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
         budget.reserve(after[i].first, after[i].second - before[i].second, "resolution");
     grow("indirect_light", predict_per_sample_light_bytes);
     if (settings.boundary_correction) grow("kernel_coverage", predict_kernel_coverage_bytes);
-    if (requested_outputs(settings) & film_bit(FilmOutput::caustics)) grow("caustic_light", predict_per_sample_light_bytes);
+    if (contains(requested_outputs(settings), FilmOutput::caustics)) grow("caustic_light", predict_per_sample_light_bytes);
 }
 
 void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,

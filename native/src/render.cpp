@@ -199,7 +199,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         photon_settings.guide = settings.guide_photons;
         photon_settings.aimed_fraction = settings.aimed_photons;
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
-        const bool caustics_output = (requested_outputs(settings) & film_bit(FilmOutput::caustics)) != 0;
+        const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
         const PhotonMap caustic_photons = caustics_output ? caustic_photons_of(photons) : PhotonMap();
 
         // 3. The cluster hierarchy, if the method splats onto one.

@@ -189,10 +189,10 @@ def luminance(rgba):
 
 def test_passes_of_a_progressive_render(caustics_scene, tmp_path, core):
     """With progressive passes the colour passes are means like the image: they still add up to Combined."""
-    use_photonsplat(caustics_scene, 32, 10_000, passes=3)
+    use_photonsplat(caustics_scene, 32, 10_000, iterations=3)
     enable_all_passes(bpy.context.view_layer)
     images = read_passes(tmp_path, ALL_PASSES)
-    assert engine.last_outcome.stats["values"]["passes"] == 3
+    assert engine.last_outcome.stats["values"]["iterations"] == 3
     assert all(np.isfinite(image).all() for image in images.values())
     rgb = {name: images[name][..., :3] for name in ("Combined", "Emit", "Direct", "Indirect", "Caustics")}
     assert np.allclose(rgb["Combined"], rgb["Emit"] + rgb["Direct"] + rgb["Indirect"], atol=1e-4)

@@ -1,5 +1,5 @@
-"""Progressive F12 inside Blender: scene.photonsplat.passes / time_limit reach the core, the running mean is
-shown after every pass, Esc after the first pass keeps the mean so far, and bad values are reported."""
+"""Progressive F12 inside Blender: scene.photonsplat.iterations / time_limit reach the core, the running mean is
+shown after every iteration, Esc after the first iteration keeps the mean so far, and bad values are reported."""
 import bpy
 import numpy as np
 import pytest
@@ -11,9 +11,9 @@ from photonsplat import engine
 def test_passes_and_time_limit_are_exported(caustics_scene, core):
     from photonsplat import export
 
-    use_photonsplat(caustics_scene, 32, 1000, passes=7, time_limit=2.5)
+    use_photonsplat(caustics_scene, 32, 1000, iterations=7, time_limit=2.5)
     settings = export.render_settings(core, caustics_scene.photonsplat)
-    assert settings.passes == 7 and settings.time_limit == 2.5
+    assert settings.iterations == 7 and settings.time_limit == 2.5
 
 
 def count_shown_images(monkeypatch):
@@ -31,16 +31,16 @@ def count_shown_images(monkeypatch):
 
 
 def test_f12_renders_passes_and_shows_each(caustics_scene, monkeypatch, tmp_path, core):
-    use_photonsplat(caustics_scene, 48, 5000, passes=3)
+    use_photonsplat(caustics_scene, 48, 5000, iterations=3)
     shown = count_shown_images(monkeypatch)
     pixels = render_pixels(tmp_path / "three_passes.exr")
     outcome = engine.last_outcome
     assert outcome.status == "finished", outcome.message
-    assert outcome.stats["values"]["passes"] == 3 and "3 passes" in outcome.message
+    assert outcome.stats["values"]["iterations"] == 3 and "3 iterations" in outcome.message
     assert len(shown) == 3 + 1
     assert np.isfinite(pixels).all() and pixels[..., :3].mean() > 0.01
     # One pass is the one-shot render, bit for bit, through the same engine path.
-    caustics_scene.photonsplat.passes = 1
+    caustics_scene.photonsplat.iterations = 1
     one = render_pixels(tmp_path / "one_pass.exr")
     image, _ = core.render(*_exported(core, caustics_scene))
     assert np.array_equal(one, image[::-1])
@@ -54,7 +54,7 @@ def _exported(core, scene):
 
 
 def test_escape_after_a_pass_keeps_the_mean(caustics_scene, monkeypatch, tmp_path, core):
-    use_photonsplat(caustics_scene, 48, 5000, passes=500)
+    use_photonsplat(caustics_scene, 48, 5000, iterations=500)
     shown = count_shown_images(monkeypatch)
     # Esc once two passes are on screen: pass 3 is cancelled, the mean of two is kept.
     monkeypatch.setattr(engine.PhotonSplatRenderEngine, "_cancel_requested", lambda self: len(shown) >= 2)
@@ -62,14 +62,14 @@ def test_escape_after_a_pass_keeps_the_mean(caustics_scene, monkeypatch, tmp_pat
     outcome = engine.last_outcome
     assert outcome.status == "finished", outcome.message
     values = outcome.stats["values"]
-    assert values["cancelled"] == 1 and values["passes"] == 2
+    assert values["cancelled"] == 1 and values["iterations"] == 2
     assert "stopped by Esc" in outcome.message
     assert np.isfinite(pixels).all() and pixels[..., :3].mean() > 0.01
 
 
 def test_no_pass_limit_without_time_limit_is_reported(caustics_scene, tmp_path, core):
-    use_photonsplat(caustics_scene, 32, 1000, passes=0, time_limit=0.0)
-    with pytest.raises(RuntimeError, match="passes"):
+    use_photonsplat(caustics_scene, 32, 1000, iterations=0, time_limit=0.0)
+    with pytest.raises(RuntimeError, match="iterations"):
         render_pixels(tmp_path / "never.exr")          # reported, and the result closed
     outcome = engine.last_outcome
-    assert outcome.status == "failed" and "passes" in outcome.message
+    assert outcome.status == "failed" and "iterations" in outcome.message

@@ -88,7 +88,7 @@ TEST(Progressive, BadSettingsAreRefusedByName) {
     };
     RenderSettings s = small_settings();
     s.iterations = 0;  // no pass limit and no time limit: would never end
-    EXPECT_EQ(field_of(s), "passes");
+    EXPECT_EQ(field_of(s), "iterations");
     s.time_limit = 1.0;
     EXPECT_EQ(field_of(s), "");
     s.time_limit = -1.0;

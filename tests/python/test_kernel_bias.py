@@ -45,7 +45,7 @@ def room():
 
 def splat(scene, camera, radius, correction=False):
     # Jittered passes at a fixed radius (alpha 1): a box filter like the reference's, and the bias of `radius`.
-    settings = ps.RenderSettings(photons=200_000, radius=radius, max_bounces=1, passes=4, alpha=1.0,
+    settings = ps.RenderSettings(photons=200_000, radius=radius, max_bounces=1, iterations=4, alpha=1.0,
                                  direct_samples=16, seed=1, boundary_correction=correction)
     image, _, passes = ps.render(scene, camera, settings, passes=True)
     return float(np.mean(image[..., :3])), float(np.mean(passes["indirect"]))

@@ -23,7 +23,7 @@ def test_default_memory_budget_is_reported_and_predictions_come_with_the_stats()
 
 
 def test_negative_memory_budget_is_refused():
-    with pytest.raises(TypeError):
+    with pytest.raises(ValueError, match="memory_budget"):
         ps.RenderSettings(memory_budget=-1)
 
 

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import settings as settings_table
 from . import camera, lights, mesh, world
 from .instancing import GeometryTable, MaterialTable, instance_name, placement, unique
 
@@ -42,21 +43,16 @@ class ExportError(Exception):
     """The scene cannot be rendered; the message tells the user what to change."""
 
 
-def render_settings_kwargs(props):
-    """scene.photonsplat -> core RenderSettings keyword arguments, field by field (the core validates the
-    values): the one conversion, used by the final render and the viewport alike."""
-    return dict(photons=props.photons, radius=props.radius, method=props.method,
-                max_bounces=props.max_bounces, seed=props.seed, threads=props.threads,
-                direct_samples=props.direct_samples, kernel=props.kernel,
-                boundary_correction=props.boundary_correction,
-                directional_level=props.directional_level, passes=props.passes,
-                time_limit=props.time_limit, memory_budget=int(props.memory_budget * 2**30))
-
-
 def render_settings(core, props, **overrides):
     """Core RenderSettings of scene.photonsplat `props`; `overrides` set fields that do not come from it
     (caustics_pass, transparent) or replace some that do."""
     return core.RenderSettings(**dict(render_settings_kwargs(props), **overrides))
+
+
+def render_settings_kwargs(props):
+    """scene.photonsplat -> core RenderSettings keyword arguments: the one conversion, used by the final render
+    and the viewport alike, from the core's settings table."""
+    return settings_table.render_settings_kwargs(props)
 
 
 def warning_lines(notes):

@@ -35,12 +35,19 @@ const std::array<FilmOutputInfo, kFilmOutputCount>& film_outputs();
 const FilmOutputInfo& film_output_info(FilmOutput output);
 FilmOutput film_output_from_string(const std::string& name);  // throws InvalidInput naming "outputs"
 
-// A set of outputs, one bit per FilmOutput.
-using FilmOutputSet = uint32_t;
-constexpr FilmOutputSet film_bit(FilmOutput output) { return FilmOutputSet(1) << static_cast<unsigned>(output); }
-constexpr FilmOutputSet kAllFilmOutputs = (FilmOutputSet(1) << kFilmOutputCount) - 1;
+// A set of outputs, one bit per FilmOutput: a type of its own, so that the settings table tells it from a count.
+enum class FilmOutputSet : uint32_t {};
+constexpr FilmOutputSet operator|(FilmOutputSet a, FilmOutputSet b) { return FilmOutputSet(uint32_t(a) | uint32_t(b)); }
+constexpr FilmOutputSet operator&(FilmOutputSet a, FilmOutputSet b) { return FilmOutputSet(uint32_t(a) & uint32_t(b)); }
+constexpr FilmOutputSet operator~(FilmOutputSet a) { return FilmOutputSet(~uint32_t(a)); }
+inline FilmOutputSet& operator|=(FilmOutputSet& a, FilmOutputSet b) { return a = a | b; }
+constexpr FilmOutputSet film_bit(FilmOutput output) { return FilmOutputSet(uint32_t(1) << unsigned(output)); }
+constexpr bool contains(FilmOutputSet set, FilmOutput output) { return uint32_t(set & film_bit(output)) != 0; }
+constexpr FilmOutputSet kAllFilmOutputs = FilmOutputSet((uint32_t(1) << kFilmOutputCount) - 1);
 // What a render produces unless told otherwise: every output but caustics, which costs a second splat.
 constexpr FilmOutputSet kDefaultFilmOutputs = kAllFilmOutputs & ~film_bit(FilmOutput::caustics);
+std::vector<std::string> film_output_names(FilmOutputSet set);  // in the table's order
+FilmOutputSet film_output_set(const std::vector<std::string>& names);  // throws InvalidInput naming "outputs"
 
 // The images of one render or iteration, row 0 at the top. Combined is always there.
 class Film {
@@ -52,7 +59,7 @@ public:
     int width() const { return width_; }
     int height() const { return height_; }
     FilmOutputSet outputs() const { return outputs_; }
-    bool has(FilmOutput output) const { return (outputs_ & film_bit(output)) != 0; }
+    bool has(FilmOutput output) const { return contains(outputs_, output); }
     // The output's pixels, height × width × channels; empty when the film does not hold it.
     std::vector<float>& operator[](FilmOutput output) { return images_[index(output)]; }
     const std::vector<float>& operator[](FilmOutput output) const { return images_[index(output)]; }
@@ -61,7 +68,7 @@ public:
 private:
     static size_t index(FilmOutput output) { return static_cast<size_t>(output); }
     int width_ = 0, height_ = 0;
-    FilmOutputSet outputs_ = 0;
+    FilmOutputSet outputs_{};
     std::array<std::vector<float>, kFilmOutputCount> images_;
 };
 
@@ -83,7 +90,7 @@ public:
 
 private:
     int width_ = 0, height_ = 0;
-    FilmOutputSet outputs_ = 0;
+    FilmOutputSet outputs_{};
     uint32_t count_ = 0;
     std::array<std::vector<double>, kFilmOutputCount> sums_;  // averaged outputs
     std::array<std::vector<float>, kFilmOutputCount> first_;  // the others
