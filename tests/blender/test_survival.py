@@ -138,7 +138,7 @@ STAGES = ["view samples", "direct light", "photons", "cluster hierarchy", "splat
 def test_cancel_in_each_stage_leaks_no_thread_and_no_memory(tmp_path, core, monkeypatch):
     scene = open_scene("cornell_caustics")
     # Sizes chosen so that every stage lasts at least a few progress polls on 2 shared cores.
-    use_photonsplat(scene, 768, 300_000, method="cluster_cone", direct_samples=2)
+    use_photonsplat(scene, 1280, 300_000, method="cluster_cone", direct_samples=6)
     module = engine.load_core()
     real_render = module.render
     target = {"stage": None, "seen": []}
