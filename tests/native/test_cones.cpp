@@ -295,6 +295,14 @@ PhotonMap random_photons(const ViewSamples& vs, size_t count, float spread, std:
     return synthetic_photons(vs, count, spread, rng, cone_photon_options());
 }
 
+// Photons as random_photons gives, all on surfaces facing +z and arriving from above: nodes on planes facing the
+// camera accept them whole.
+PhotonMap photons_from_above(const ViewSamples& vs, size_t count, float spread, std::mt19937& rng) {
+    PhotonMap map = random_photons(vs, count, spread, rng);
+    for (Photon& p : map.photons) p.normal = glm::vec3(0, 0, 1), p.wi = glm::normalize(p.wi + glm::vec3(0, 0, 2));
+    return map;
+}
+
 ClusterHierarchy build_with_cones(const ViewSamples& vs, const ClusterKeyParams& key) {
     ClusterBuildOptions options;
     options.normal_cones = true;
@@ -402,15 +410,12 @@ TEST(SplatClusterCone, LongLeafListsWithAccepts) {
 
 TEST(SplatClusterCone, LargeRadiusAcceptsWholeNodesAndSavesSampleTests) {
     std::mt19937 rng(11);
-    SyntheticOptions o = cone_scene_options();
-    o.width = 96;
-    o.height = 64;
+    SyntheticOptions o = sized(96, 64, cone_scene_options());
     o.specular_fraction = 0.0;
     o.axis_aligned = true;
     o.planes = 2;
     const ViewSamples vs = random_scene(o, rng);
-    PhotonMap map = random_photons(vs, 1500, 0.2f, rng);
-    for (Photon& p : map.photons) p.normal = glm::vec3(0, 0, 1), p.wi = glm::normalize(p.wi + glm::vec3(0, 0, 2));
+    const PhotonMap map = photons_from_above(vs, 1500, 0.2f, rng);
     const Outcome out = compare(vs, map, splat_params(2.0f, map), key_params(96, 64), "large radius");
     report("large radius", out);
     EXPECT_GT(counter(out.cone, "node_accepts"), 1000.0);
@@ -449,8 +454,7 @@ TEST(SplatClusterCone, GlossySamplesAreNeverAccepted) {
     o.specular_fraction = 0.0;
     o.glossy_fraction = 0.01;
     const ViewSamples vs = random_scene(o, rng);
-    PhotonMap map = random_photons(vs, 2000, 0.3f, rng);
-    for (Photon& p : map.photons) p.normal = glm::vec3(0, 0, 1), p.wi = glm::normalize(p.wi + glm::vec3(0, 0, 2));
+    const PhotonMap map = photons_from_above(vs, 2000, 0.3f, rng);
     const Outcome mixed = compare(vs, map, splat_params(1.0f, map), key_params(48, 40), "1% glossy");
     report("1% glossy", mixed);
     EXPECT_GT(counter(mixed.cone, "node_accepts"), 0.0);
@@ -500,12 +504,8 @@ TEST(SplatClusterCone, PhotonsOnBoxFacesAndAtDistanceExactlyR) {
     for (float r : {0.5f, 2.0f}) {
         PhotonMap map;
         auto add = [&](const glm::vec3& position, bool grazing) {
-            Photon p{};
-            p.position = position;
-            p.wi = grazing ? glm::normalize(glm::vec3(1.0f, 0.0f, 1e-7f)) : glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f));
-            p.normal = glm::vec3(0, 0, 1);
-            p.power = glm::vec3(1.0f);
-            map.photons.push_back(p);
+            map.photons.push_back(photon_at(position, grazing ? glm::normalize(glm::vec3(1.0f, 0.0f, 1e-7f))
+                                                              : glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f))));
         };
         const float below = std::nextafter(r, 0.0f), above = std::nextafter(r, 1.0f);
         for (const ClusterNode& node : h.nodes) {
@@ -560,9 +560,7 @@ TEST(SplatClusterCone, GrazingPhotons) {
 
 TEST(SplatClusterCone, SingleSampleLeavesAndSamplesThroughMirrors) {
     std::mt19937 rng(5);
-    SyntheticOptions o = cone_scene_options();
-    o.width = 96;
-    o.height = 64;
+    SyntheticOptions o = sized(96, 64, cone_scene_options());
     o.coverage = 0.02;
     const ViewSamples sparse = random_scene(o, rng);
     const ClusterHierarchy h = build_with_cones(sparse, key_params(96, 64));
@@ -592,9 +590,7 @@ TEST(SplatClusterCone, RefusesAHierarchyWithoutCones) {
 // Bounded memory: a tiny pair cap makes many batches; accepts must still land once each, in photon order.
 TEST(SplatClusterCone, TinyPairCapManyBatchesAndThreadCountsGiveTheSameOutput) {
     std::mt19937 rng(89);
-    SyntheticOptions o = cone_scene_options();
-    o.width = 64;
-    o.height = 48;
+    const SyntheticOptions o = sized(64, 48, cone_scene_options());
     const ViewSamples vs = random_scene(o, rng);
     const PhotonMap map = random_photons(vs, 1500, 0.5f, rng);
     const ClusterHierarchy h = build_with_cones(vs, key_params(64, 48));

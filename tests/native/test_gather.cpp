@@ -41,12 +41,7 @@ namespace {
 using namespace test;
 
 // The synthetic scenes of these tests (test_support.h) are 40 × 32 pixels.
-SyntheticOptions gather_scene() {
-    SyntheticOptions o;
-    o.width = 40;
-    o.height = 32;
-    return o;
-}
+SyntheticOptions gather_scene() { return sized(40, 32); }
 
 // Gather against brute: test::compare_with_brute.
 Comparison check_against_brute(const ViewSamples& vs, const PhotonMap& map, const SplatParams& params) {
@@ -84,12 +79,8 @@ TEST(GatherSplat, PhotonsOnCellBoundariesAndAtDistanceExactlyR) {
     }
     PhotonMap map;
     auto add = [&](const glm::vec3& position) {
-        Photon p{};
-        p.position = position;
-        p.wi = glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f));
-        p.normal = glm::vec3(0, 0, 1);
-        p.power = glm::vec3(1.0f + 0.001f * float(map.photons.size() % 7));
-        map.photons.push_back(p);
+        const glm::vec3 power(1.0f + 0.001f * float(map.photons.size() % 7));
+        map.photons.push_back(photon_at(position, glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f)), power));
     };
     add(glm::vec3(-10.0f, -10.0f, -10.0f));  // the grid's lower corner: cell boundaries at −10 + k·r
     for (int i = 0; i <= 16; ++i)
@@ -198,9 +189,7 @@ TEST(GatherSplat, NonFinitePositions) {
 // sample and the merge of many long runs must keep the ascending order.
 TEST(GatherSplat, LongCandidateListsFromManyCells) {
     std::mt19937 rng(53);
-    SyntheticOptions options = gather_scene();
-    options.width = 16;
-    options.height = 12;
+    SyntheticOptions options = sized(16, 12);
     options.planes = 1;
     options.min_depth = options.max_depth = 2.0f;
     options.specular_fraction = 0.0;

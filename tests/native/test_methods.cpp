@@ -50,8 +50,7 @@ TEST_P(ExactMethod, MatchesBruteOnRandomScenesAtEveryRadiusAndBothKernels) {
     double accepts = 0.0, facing = 0.0, orientation = 0.0;
     for (uint32_t seed = 1; seed <= 3; ++seed) {
         std::mt19937 rng(seed);
-        const SyntheticOptions options;
-        const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+        const MethodFrame frame = synthetic_frame(method, SyntheticOptions{}, rng);
         const PhotonMap map = synthetic_photons(frame.samples, 3000, 0.5f, rng);
         for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
             for (float radius : {1e-3f, 0.05f, 0.3f, 1.5f, 1e3f}) {  // tiny … larger than the scene
@@ -91,7 +90,7 @@ TEST_P(ExactMethod, MatchesBruteWithPlaneDistanceAndStrictNormals) {
     const SplatMethod method = GetParam();
     std::mt19937 rng(17);
     const SyntheticOptions options;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, options, rng);
     const PhotonMap map = synthetic_photons(frame.samples, 2000, 0.4f, rng);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
         SplatParams params = splat_params(0.25f, map, kernel);
@@ -160,10 +159,7 @@ TEST_P(ExactMethod, RenderOfTheCornellBoxEqualsBrute) {
 TEST_P(ExactMethod, StopsPromptlyWhenCancelledMidway) {
     const SplatMethod method = GetParam();
     std::mt19937 rng(71);
-    SyntheticOptions options;
-    options.width = 160;
-    options.height = 120;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, sized(160, 120), rng);
     const PhotonMap map = synthetic_photons(frame.samples, 200000, 0.5f, rng);
     SplatParams params = splat_params(1e3f, map);
     params.max_pairs_in_memory = 4000;
@@ -193,10 +189,7 @@ TEST_P(AnyMethod, SameOutputAndCountersWithOneTwoAndEightThreads) {
     tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 8);
     const SplatMethod method = GetParam();
     std::mt19937 rng(59);
-    SyntheticOptions options;
-    options.width = 96;
-    options.height = 80;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, sized(96, 80), rng);
     const PhotonMap map = synthetic_photons(frame.samples, 5000, 0.5f, rng);
     // The default pair cap, and a small one: many batches with several ranges in flight.
     const uint64_t small_cap = 8 * std::max<uint64_t>(frame.hierarchy.leaves.size(), 64);
@@ -246,7 +239,7 @@ TEST_P(AnyMethod, ZeroPhotonsGiveZeroRadianceAndZeroSamplesNoOutput) {
     const SplatMethod method = GetParam();
     std::mt19937 rng(3);
     const SyntheticOptions options;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, options, rng);
     PhotonMap none;  // emitted 0 too: fine when nothing was stored
     RenderControl control;
     Stats stats;
@@ -257,7 +250,7 @@ TEST_P(AnyMethod, ZeroPhotonsGiveZeroRadianceAndZeroSamplesNoOutput) {
 
     SyntheticOptions no_samples = options;
     no_samples.coverage = 0.0;
-    const MethodFrame empty(method, synthetic_view_samples(no_samples, rng), synthetic_camera(no_samples));
+    const MethodFrame empty = synthetic_frame(method, no_samples, rng);
     ASSERT_TRUE(empty.samples.samples.empty());
     const PhotonMap map = synthetic_photons(frame.samples, 100, 0.1f, rng);
     EXPECT_TRUE(run_splat(method, empty.input(), map, splat_params(0.3f, map), control, stats).empty());
@@ -267,7 +260,7 @@ TEST_P(AnyMethod, RefusesBadParams) {
     const SplatMethod method = GetParam();
     std::mt19937 rng(73);
     const SyntheticOptions options;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, options, rng);
     const PhotonMap map = synthetic_photons(frame.samples, 100, 0.5f, rng);
     RenderControl control;
     Stats stats;
@@ -287,7 +280,7 @@ TEST_P(AnyMethod, CancelledBeforeStartThrows) {
     const SplatMethod method = GetParam();
     std::mt19937 rng(67);
     const SyntheticOptions options;
-    const MethodFrame frame(method, synthetic_view_samples(options, rng), synthetic_camera(options));
+    const MethodFrame frame = synthetic_frame(method, options, rng);
     const PhotonMap map = synthetic_photons(frame.samples, 1000, 0.5f, rng);
     RenderControl control;
     control.request_cancel();

@@ -47,12 +47,7 @@ TEST(SplatCluster, PhotonsOnBoxBoundariesAndAtDistanceExactlyR) {
     const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(32, 32));
     PhotonMap map;
     auto add = [&](const glm::vec3& position) {
-        Photon p{};
-        p.position = position;
-        p.wi = glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f));
-        p.normal = glm::vec3(0, 0, 1);
-        p.power = glm::vec3(1.0f);
-        map.photons.push_back(p);
+        map.photons.push_back(photon_at(position, glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f))));
     };
     const float below = std::nextafter(r, 0.0f), above = std::nextafter(r, 1.0f);
     for (const ClusterNode& node : hierarchy.nodes) {
@@ -98,9 +93,7 @@ TEST(SplatCluster, GrazingPhotons) {
 
 TEST(SplatCluster, SparseSamplesGiveSingleSampleLeaves) {
     std::mt19937 rng(5);
-    SyntheticOptions options;
-    options.width = 96;
-    options.height = 64;
+    SyntheticOptions options = sized(96, 64);
     options.coverage = 0.02;
     options.specular_fraction = 0.0;
     const ViewSamples vs = synthetic_view_samples(options, rng);
@@ -216,9 +209,7 @@ TEST(SplatCluster, OnePhotonAloneBeyondThePairCap) {
 // Many batches with several ranges in flight: the same output with one thread, two threads, and the oracle.
 TEST(SplatCluster, SmallPairCapSameOutputWithOneAndTwoThreads) {
     std::mt19937 rng(89);
-    SyntheticOptions options;
-    options.width = 96;
-    options.height = 80;
+    const SyntheticOptions options = sized(96, 80);
     const ViewSamples vs = synthetic_view_samples(options, rng);
     const PhotonMap map = synthetic_photons(vs, 4000, 0.5f, rng);
     const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, key_params(96, 80));

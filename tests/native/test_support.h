@@ -245,6 +245,16 @@ inline ViewSamples binary_grid_samples() {
     return vs;
 }
 
+// A photon at `position` on a surface facing +z, arriving along wi (towards the light).
+inline Photon photon_at(const glm::vec3& position, const glm::vec3& wi, const glm::vec3& power = glm::vec3(1.0f)) {
+    Photon p{};
+    p.position = position;
+    p.wi = wi;
+    p.normal = glm::vec3(0, 0, 1);
+    p.power = power;
+    return p;
+}
+
 // ---- parameters and counters --------------------------------------------------------------------------------
 
 inline SplatParams splat_params(float radius, const PhotonMap& map, Kernel kernel = Kernel::uniform) {
@@ -312,6 +322,18 @@ struct MethodFrame {
           hierarchy(hierarchy_for(method, samples, ClusterKeyParams::from_camera(cam))) {}
     SplatInput input() const { return {samples, &hierarchy, &camera}; }
 };
+
+// Synthetic samples drawn from rng, seen by the synthetic camera, with the hierarchy `method` needs.
+inline MethodFrame synthetic_frame(SplatMethod method, const SyntheticOptions& o, std::mt19937& rng) {
+    return MethodFrame(method, synthetic_view_samples(o, rng), synthetic_camera(o));
+}
+
+// The default synthetic options at another image size.
+inline SyntheticOptions sized(int width, int height, SyntheticOptions o = {}) {
+    o.width = width;
+    o.height = height;
+    return o;
+}
 
 // ---- comparing with the oracle --------------------------------------------------------------------------------
 
