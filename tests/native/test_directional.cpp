@@ -21,21 +21,12 @@
 #include "photonsplat/scene.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
-#include "test_scenes.h"
+#include "test_support.h"
 
 namespace ps {
 namespace {
 
-constexpr float kTanHalfFov = 0.57735027f;  // 60° vertical field of view
-
-ClusterKeyParams key_params(int width, int height) {
-    ClusterKeyParams params;
-    params.width = width;
-    params.height = height;
-    params.near_clip = 0.1f;
-    params.vertical_half_extent = kTanHalfFov;
-    return params;
-}
+using namespace test;
 
 ViewSample diffuse_sample(const glm::vec3& position, const glm::vec3& normal, uint32_t pixel, float depth) {
     ViewSample s{};
@@ -55,11 +46,9 @@ ViewSamples plane_view(int width, int plane_height_px, float height) {
     vs.width = width;
     vs.height = plane_height_px;
     vs.origin = glm::vec3(120.0f, -35.0f, 7.0f);  // away from 0: everything is splatted relative to it
-    const float aspect = float(width) / float(plane_height_px);
     for (int y = 0; y < plane_height_px; ++y)
         for (int x = 0; x < width; ++x) {
-            const glm::vec3 dir((2.0f * (x + 0.5f) / width - 1.0f) * kTanHalfFov * aspect,
-                                (1.0f - 2.0f * (y + 0.5f) / plane_height_px) * kTanHalfFov, -1.0f);
+            const glm::vec3 dir = synthetic_pixel_direction(x, y, width, plane_height_px);
             vs.samples.push_back(diffuse_sample(dir * height, glm::vec3(0, 0, 1), uint32_t(y * width + x), height));
         }
     return vs;
@@ -90,7 +79,7 @@ PhotonMap uniform_plane_photons(const ViewSamples& vs, size_t count, float heigh
     return map;
 }
 
-SplatParams splat_params(float radius, const PhotonMap& map, int level = -1, Kernel kernel = Kernel::uniform) {
+SplatParams directional_params(float radius, const PhotonMap& map, int level = -1, Kernel kernel = Kernel::uniform) {
     SplatParams params;
     params.radius = radius;
     params.emitted = map.emitted;
@@ -135,11 +124,11 @@ TEST(Directional, UniformlyLitPlaneAveragesWhatBruteGives) {
     const PhotonMap map = uniform_plane_photons(vs, 20000, 4.0f, r, rng);
     const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(96, 64));
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        const double expected = luminance_sum(brute(vs, map, splat_params(r, map, 0, kernel)));
+        const double expected = luminance_sum(brute(vs, map, directional_params(r, map, 0, kernel)));
         // (Level 2 would leave 6 nodes on this small image: a mean of 6 estimates, too noisy to compare.)
         for (int level : {0, 1, -1}) {
             Stats stats;
-            const std::vector<glm::vec3> out = directional(vs, h, map, splat_params(r, map, level, kernel), stats);
+            const std::vector<glm::vec3> out = directional(vs, h, map, directional_params(r, map, level, kernel), stats);
             const double ratio = luminance_sum(out) / expected;
             std::printf("plane, %s kernel, level %d (used %g): mean / brute's = %.4f\n", to_string(kernel), level,
                         stats.values.at("directional_level"), ratio);
@@ -186,7 +175,7 @@ TEST(Directional, SingleSampleNodesAtLevelZeroEqualBrute) {
     }
     map.emitted = 9000;
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        const SplatParams params = splat_params(0.25f, map, 0, kernel);
+        const SplatParams params = directional_params(0.25f, map, 0, kernel);
         const std::vector<glm::vec3> expected = brute(vs, map, params);
         Stats stats;
         const std::vector<glm::vec3> actual = directional(vs, h, map, params, stats);
@@ -210,7 +199,7 @@ TEST(Directional, LevelZeroApproachesBruteAsNodesShrinkRelativeToR) {
     double previous = INFINITY;
     for (float r : {0.3f, 0.8f, 2.0f}) {
         const PhotonMap map = uniform_plane_photons(vs, 8000, 4.0f, r, rng);
-        const SplatParams params = splat_params(r, map, 0);
+        const SplatParams params = directional_params(r, map, 0);
         Stats stats;
         const double error = mean_relative_difference(directional(vs, h, map, params, stats), brute(vs, map, params));
         std::printf("plane, r = %.1f: mean per-sample relative difference to brute %.4f\n", r, error);
@@ -221,11 +210,6 @@ TEST(Directional, LevelZeroApproachesBruteAsNodesShrinkRelativeToR) {
 }
 
 RenderResult render_cornell(SplatMethod method, int level, float radius, int size = 64) {
-    static Scene* scene = [] {
-        auto* s = new Scene;
-        test::build_cornell_box(*s, true);
-        return s;
-    }();
     RenderSettings settings;
     settings.photons = 20000;
     settings.radius = radius;
@@ -234,7 +218,7 @@ RenderResult render_cornell(SplatMethod method, int level, float radius, int siz
     settings.seed = 3;
     settings.direct_samples = 1;
     RenderControl control;
-    return render(*scene, test::cornell_camera(size, size), settings, control);
+    return render(cornell_scene(), cornell_camera(size, size), settings, control);
 }
 
 TEST(Directional, CornellBoxStaysCloseToBrute) {
@@ -271,30 +255,16 @@ TEST(Directional, AutoLevelFallsBackToExactWhenLeavesAreMuchLargerThanR) {
 }
 
 ViewSamples random_planes_view(std::mt19937& rng, int width, int height) {
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
     ViewSamples vs;
     vs.width = width;
     vs.height = height;
     vs.origin = glm::vec3(50.0f, 20.0f, -10.0f);
-    std::vector<std::pair<glm::vec3, float>> planes;
-    for (int i = 0; i < 4; ++i) {
-        const glm::vec3 n = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, 0.5f + u(rng)));
-        planes.push_back({n, -(2.0f + 10.0f * u(rng)) * n.z});
-    }
-    const float aspect = float(width) / float(height);
+    const std::vector<Plane> planes = random_planes(rng, 4, 2.0f, 12.0f);
     for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
-            const glm::vec3 dir((2.0f * (x + 0.5f) / width - 1.0f) * kTanHalfFov * aspect,
-                                (1.0f - 2.0f * (y + 0.5f) / height) * kTanHalfFov, -1.0f);
-            float t_best = INFINITY;
-            glm::vec3 n_best(0, 0, 1);
-            for (const auto& [n, d] : planes) {
-                const float t = d / glm::dot(n, dir);
-                if (t > 0.0f && t < t_best) t_best = t, n_best = n;
-            }
-            if (!std::isfinite(t_best)) continue;
-            vs.samples.push_back(diffuse_sample(dir * t_best, glm::dot(n_best, dir) < 0.0f ? n_best : -n_best,
-                                                uint32_t(y * width + x), t_best));
+            const glm::vec3 dir = synthetic_pixel_direction(x, y, width, height);
+            const auto [t, normal] = nearest_plane(planes, dir);
+            if (std::isfinite(t)) vs.samples.push_back(diffuse_sample(dir * t, normal, uint32_t(y * width + x), t));
         }
     return vs;
 }
@@ -314,28 +284,6 @@ PhotonMap photons_near_samples(const ViewSamples& vs, size_t count, float spread
     }
     map.emitted = 2 * count;
     return map;
-}
-
-TEST(Directional, SameBitsForAnyThreadCount) {
-    tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 8);
-    std::mt19937 rng(29);
-    const ViewSamples vs = random_planes_view(rng, 96, 80);
-    const PhotonMap map = photons_near_samples(vs, 6000, 0.6f, rng);
-    const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(96, 80));
-    for (int level : {0, 1}) {
-        SplatParams params = splat_params(0.3f, map, level, Kernel::epanechnikov);
-        params.plane_distance_factor = level == 1 ? 0.2f : 0.0f;
-        auto run = [&](int threads) {
-            std::vector<glm::vec3> out;
-            Stats stats;
-            tbb::task_arena(threads).execute([&] { out = directional(vs, h, map, params, stats); });
-            EXPECT_GT(stats.counters.at("node_deposits"), 0.0);
-            return out;
-        };
-        const std::vector<glm::vec3> one = run(1);
-        EXPECT_EQ(one, run(2)) << "level " << level;
-        EXPECT_EQ(one, run(8)) << "level " << level;
-    }
 }
 
 // Flat cut nodes are described from the leaves' summaries (ClusterBuildOptions::leaf_summaries) instead of their
@@ -389,7 +337,7 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
         ASSERT_EQ(summarised.leaf_summary_begin.size(), summarised.leaves.size() + 1);
         ASSERT_EQ(summarised.leaf_summaries.size(), summarised.leaf_summary_begin.back());
         for (int level : {0, 1, 2}) {
-            SplatParams params = splat_params(0.3f, c.map, level);
+            SplatParams params = directional_params(0.3f, c.map, level);
             params.plane_distance_factor = 0.2f;
             Stats plain_stats, summarised_stats;
             const std::vector<glm::vec3> a = directional(c.vs, plain, c.map, params, plain_stats);
@@ -426,21 +374,21 @@ TEST(Directional, AutoLevelIsAFixedLevelAndHighLevelsClampToTheRoot) {
     const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(96, 80));
     const float r = 2.5f;  // nodes of a few levels fit inside r: the automatic level is above 0
     Stats auto_stats;
-    const std::vector<glm::vec3> automatic = directional(vs, h, map, splat_params(r, map, -1), auto_stats);
+    const std::vector<glm::vec3> automatic = directional(vs, h, map, directional_params(r, map, -1), auto_stats);
     const int level = int(auto_stats.values.at("directional_level"));
     EXPECT_GE(level, 1);
     EXPECT_EQ(auto_stats.values.at("directional_exact_fallback"), 0.0);
     Stats fixed_stats;
-    EXPECT_EQ(automatic, directional(vs, h, map, splat_params(r, map, level), fixed_stats));
+    EXPECT_EQ(automatic, directional(vs, h, map, directional_params(r, map, level), fixed_stats));
     // A larger radius never picks a lower level.
     Stats larger;
-    directional(vs, h, map, splat_params(2.0f * r, map, -1), larger);
+    directional(vs, h, map, directional_params(2.0f * r, map, -1), larger);
     EXPECT_GE(larger.values.at("directional_level"), double(level));
     // Beyond the root's height the whole image is one node.
     Stats top, beyond;
-    const std::vector<glm::vec3> at_64 = directional(vs, h, map, splat_params(r, map, 64), beyond);
+    const std::vector<glm::vec3> at_64 = directional(vs, h, map, directional_params(r, map, 64), beyond);
     EXPECT_EQ(beyond.counters.at("directional_cut_nodes"), 1.0);
-    EXPECT_EQ(at_64, directional(vs, h, map, splat_params(r, map, int(beyond.values.at("directional_level"))), top));
+    EXPECT_EQ(at_64, directional(vs, h, map, directional_params(r, map, int(beyond.values.at("directional_level"))), top));
     EXPECT_LE(beyond.values.at("directional_level"), double(h.depth));
 }
 
@@ -475,7 +423,7 @@ TEST(Directional, PhotonsFacingAwayDoNotLightASample) {
     }
     map.emitted = 3000;
     for (int level : {0, 1, 2}) {
-        SplatParams params = splat_params(0.4f, map, level);
+        SplatParams params = directional_params(0.4f, map, level);
         params.cos_normal_tolerance = -1.0f;  // keep every photon up to the facing test
         Stats stats;
         const std::vector<glm::vec3> out = directional(vs, h, map, params, stats);
@@ -490,43 +438,13 @@ TEST(Directional, PhotonsFacingAwayDoNotLightASample) {
     }
 }
 
-TEST(Directional, ZeroPhotonsAndZeroSamples) {
-    const ViewSamples vs = plane_view(32, 24, 3.0f);
-    const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(32, 24));
-    PhotonMap none;  // emitted 0 too: fine when nothing was stored
-    Stats stats;
-    const std::vector<glm::vec3> out = directional(vs, h, none, splat_params(0.3f, none), stats);
-    ASSERT_EQ(out.size(), vs.samples.size());
-    for (const glm::vec3& v : out) EXPECT_EQ(v, glm::vec3(0.0f));
-    EXPECT_EQ(stats.counters.at("node_deposits"), 0.0);
-
-    ViewSamples empty;
-    empty.width = empty.height = 4;
-    std::mt19937 rng(3);
-    const PhotonMap map = uniform_plane_photons(vs, 100, 3.0f, 0.1f, rng);
-    EXPECT_TRUE(directional(empty, build_cluster_hierarchy(empty, key_params(4, 4)), map,
-                            splat_params(0.3f, map), stats).empty());
-}
-
-TEST(Directional, CancelThrowsCancelled) {
-    const ViewSamples vs = plane_view(32, 24, 3.0f);
-    const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(32, 24));
-    std::mt19937 rng(3);
-    const PhotonMap map = uniform_plane_photons(vs, 1000, 3.0f, 0.1f, rng);
-    RenderControl control;
-    control.request_cancel();
-    Stats stats;
-    EXPECT_THROW(splat_directional(h, vs, map, splat_params(0.3f, map, 0), control, stats), Cancelled);
-    EXPECT_THROW(splat_directional(h, vs, map, splat_params(0.3f, map, -1), control, stats), Cancelled);
-}
-
 TEST(Directional, ReportsCountersAndBins) {
     const ViewSamples vs = plane_view(64, 48, 3.0f);
     const ClusterHierarchy h = build_cluster_hierarchy(vs, key_params(64, 48));
     std::mt19937 rng(7);
     const PhotonMap map = uniform_plane_photons(vs, 2000, 3.0f, 0.3f, rng);
     Stats stats;
-    directional(vs, h, map, splat_params(1.0f, map, 0), stats);
+    directional(vs, h, map, directional_params(1.0f, map, 0), stats);
     EXPECT_EQ(stats.counters.at("photon_sample_tests"), 0.0);
     EXPECT_GT(stats.counters.at("node_deposits"), double(map.photons.size()));
     EXPECT_GE(stats.counters.at("photon_node_tests"), stats.counters.at("node_deposits"));
@@ -536,7 +454,7 @@ TEST(Directional, ReportsCountersAndBins) {
     EXPECT_EQ(stats.bytes.at("direction_bins"), double(h.leaves.size() * 8 * 6 * sizeof(int64_t)));
     EXPECT_GT(stats.seconds.at("splat_traverse"), 0.0);
     EXPECT_GT(stats.seconds.at("splat_shade"), 0.0);
-    EXPECT_THROW(directional(vs, h, map, splat_params(-1.0f, map, 0), stats), InvalidInput);
+    EXPECT_THROW(directional(vs, h, map, directional_params(-1.0f, map, 0), stats), InvalidInput);
 }
 
 }  // namespace

@@ -33,180 +33,27 @@
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/view_samples.h"
-#include "test_scenes.h"
+#include "test_support.h"
 
 namespace ps {
 namespace {
 
-constexpr float kTanHalfFov = 0.57735027f;  // 60° vertical field of view
+using namespace test;
 
-glm::vec3 unit_vector(std::mt19937& rng) {
-    std::normal_distribution<float> g;
-    for (;;) {
-        const glm::vec3 v(g(rng), g(rng), g(rng));
-        const float len = glm::length(v);
-        if (len > 1e-3f) return v / len;
-    }
+// The synthetic scenes of these tests (test_support.h) are 40 × 32 pixels.
+SyntheticOptions gather_scene() { return sized(40, 32); }
+
+// Gather against brute: test::compare_with_brute.
+Comparison check_against_brute(const ViewSamples& vs, const PhotonMap& map, const SplatParams& params) {
+    return compare_with_brute(SplatMethod::gather, {vs}, map, params);
 }
 
-struct Synthetic {
-    int width = 40, height = 32;
-    double coverage = 0.95;          // fraction of pixels with a sample
-    double specular_fraction = 0.1;  // samples "seen through a mirror": moved to random places
-    int planes = 4;
-    float min_depth = 1.0f, max_depth = 20.0f;
-    glm::vec3 origin{250.0f, -40.0f, 12.0f};  // world position of the camera
-    glm::vec3 offset{0.0f};                   // added to every sample's relative position
-};
-
-// A pinhole camera looking down −z at randomly tilted planes: one sample per covered pixel on the nearest plane.
-ViewSamples make_samples(const Synthetic& o, std::mt19937& rng) {
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    ViewSamples vs;
-    vs.width = o.width;
-    vs.height = o.height;
-    vs.origin = o.origin;
-    std::vector<std::pair<glm::vec3, float>> planes;  // n·x = d
-    for (int i = 0; i < o.planes; ++i) {
-        const glm::vec3 n = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, 0.5f + u(rng)));
-        planes.push_back({n, -(o.min_depth + (o.max_depth - o.min_depth) * u(rng)) * n.z});
-    }
-    const float aspect = float(o.width) / float(o.height);
-    for (int y = 0; y < o.height; ++y)
-        for (int x = 0; x < o.width; ++x) {
-            if (u(rng) > o.coverage) continue;
-            const glm::vec3 dir((2.0f * (x + 0.5f) / o.width - 1.0f) * kTanHalfFov * aspect,
-                                (1.0f - 2.0f * (y + 0.5f) / o.height) * kTanHalfFov, -1.0f);
-            float t_best = INFINITY;
-            glm::vec3 n_best(0, 0, 1);
-            for (const auto& [n, d] : planes) {
-                const float t = d / glm::dot(n, dir);
-                if (t > 0.0f && t < t_best) t_best = t, n_best = n;
-            }
-            if (!std::isfinite(t_best)) continue;
-            ViewSample s{};
-            s.position = dir * t_best + o.offset;
-            s.normal = s.shading_normal = glm::dot(n_best, dir) < 0.0f ? n_best : -n_best;
-            s.wo = -glm::normalize(dir);
-            s.albedo = glm::vec3(u(rng), u(rng), u(rng));
-            s.throughput = glm::vec3(1.0f);
-            s.pixel = uint32_t(y * o.width + x);
-            s.depth = t_best;
-            if (u(rng) < o.specular_fraction) {
-                s.flags = kViaSpecular;
-                s.position = glm::vec3(u(rng) * 8.0f - 4.0f, u(rng) * 8.0f - 4.0f, -2.0f - u(rng) * 10.0f) + o.offset;
-                s.normal = s.shading_normal = unit_vector(rng);
-                s.throughput = glm::vec3(0.2f + u(rng), 0.2f + u(rng), 0.2f + u(rng));
-            }
-            vs.samples.push_back(s);
-        }
-    return vs;
-}
-
-// Photons around random samples (within `spread`), mostly on the sample's side and orientation, sometimes not.
-PhotonMap make_photons(const ViewSamples& vs, size_t count, float spread, std::mt19937& rng) {
-    std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    PhotonMap map;
-    map.emitted = count * 3 + 1;
-    for (size_t i = 0; i < count && !vs.samples.empty(); ++i) {
-        const ViewSample& s = vs.samples[size_t(u(rng) * float(vs.samples.size())) % vs.samples.size()];
-        Photon p{};
-        p.position = vs.origin + s.position + unit_vector(rng) * (spread * u(rng));
-        p.normal = u(rng) < 0.8f ? glm::normalize(s.normal + 0.3f * unit_vector(rng)) : unit_vector(rng);
-        p.wi = unit_vector(rng);
-        if (glm::dot(p.wi, p.normal) < 0.0f) p.wi = -p.wi;
-        p.power = glm::vec3(0.5f + u(rng), 0.5f + u(rng), 0.5f + u(rng));
-        p.flags = u(rng) < 0.1f ? kCaustic : 0u;
-        map.photons.push_back(p);
-    }
-    return map;
-}
-
-SplatParams params_for(float radius, const PhotonMap& map, Kernel kernel = Kernel::uniform) {
-    SplatParams params;
-    params.radius = radius;
-    params.emitted = std::max<uint64_t>(map.emitted, 1);
-    params.kernel = kernel;
-    return params;
-}
-
-double counter(const Stats& stats, const char* name) {
-    const auto it = stats.counters.find(name);
-    return it == stats.counters.end() ? -1.0 : it->second;
-}
-
-struct Outcome {
-    size_t samples = 0, identical = 0;
-    Stats brute, gather;
-};
-
-// Both methods on the same input; gather must equal brute to 1e-4 relative per sample and channel, with the
-// same contributing pairs and never more per-sample tests.
-Outcome check_against_brute(const ViewSamples& vs, const PhotonMap& map, const SplatParams& params) {
-    Outcome o;
-    RenderControl control;
-    const std::vector<glm::vec3> expected = splat_brute(vs, map, params, control, o.brute);
-    const std::vector<glm::vec3> actual = splat_gather(vs, map, params, control, o.gather);
-    EXPECT_EQ(actual.size(), vs.samples.size());
-    o.samples = std::min(expected.size(), actual.size());
-    size_t failures = 0;
-    for (size_t i = 0; i < o.samples; ++i) {
-        bool same = true;
-        for (int ch = 0; ch < 3; ++ch) {
-            const float a = actual[i][ch], e = expected[i][ch];
-            const bool ok = std::isfinite(a) && std::fabs(a - e) <= 1e-4f * std::max(std::fabs(a), std::fabs(e));
-            if (!ok && ++failures <= 5)
-                ADD_FAILURE() << "sample " << i << " channel " << ch << ": gather " << a << ", brute " << e;
-            same = same && a == e;
-        }
-        o.identical += same ? 1 : 0;
-    }
-    EXPECT_EQ(failures, 0u);
-    EXPECT_EQ(counter(o.gather, "contributing_pairs"), counter(o.brute, "contributing_pairs"));
-    EXPECT_LE(counter(o.gather, "photon_sample_tests"), counter(o.brute, "photon_sample_tests"));
-    return o;
-}
-
-void print(const std::string& what, const Outcome& o) {
+void print(const std::string& what, const Comparison& o) {
     std::printf("%-34s %5zu samples, %5zu bit-identical, pairs %8.0f, tests brute %9.0f / gather %8.0f, "
                 "cells %6.0f, cell visits %7.0f\n",
                 what.c_str(), o.samples, o.identical, counter(o.brute, "contributing_pairs"),
-                counter(o.brute, "photon_sample_tests"), counter(o.gather, "photon_sample_tests"),
-                counter(o.gather, "grid_cells"), counter(o.gather, "cell_visits"));
-}
-
-TEST(GatherSplat, MatchesBruteOnRandomScenesAtEveryRadiusAndBothKernels) {
-    size_t samples = 0, identical = 0;
-    for (uint32_t seed = 1; seed <= 3; ++seed) {
-        std::mt19937 rng(seed);
-        const ViewSamples vs = make_samples(Synthetic{}, rng);
-        const PhotonMap map = make_photons(vs, 2500, 0.5f, rng);
-        for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
-            for (float radius : {1e-3f, 0.05f, 0.3f, 1e3f}) {  // tiny … larger than the scene
-                const std::string what = std::string(to_string(kernel)) + " radius " + std::to_string(radius);
-                SCOPED_TRACE("seed " + std::to_string(seed) + " " + what);
-                const Outcome o = check_against_brute(vs, map, params_for(radius, map, kernel));
-                if (radius == 0.3f) EXPECT_GT(counter(o.brute, "contributing_pairs"), 1000.0);
-                if (radius == 1e3f) EXPECT_EQ(counter(o.gather, "grid_cells"), 1.0);  // one cell: still exact
-                if (seed == 1) print(what, o);
-                samples += o.samples;
-                identical += o.identical;
-            }
-    }
-    std::printf("bit-identical: %zu of %zu samples\n", identical, samples);
-    EXPECT_EQ(identical, samples) << "same photons in the same order as brute: bit-identical expected";
-}
-
-TEST(GatherSplat, MatchesBruteWithPlaneDistanceAndStrictNormals) {
-    std::mt19937 rng(17);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    const PhotonMap map = make_photons(vs, 2000, 0.4f, rng);
-    for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        SplatParams params = params_for(0.25f, map, kernel);
-        params.plane_distance_factor = 0.2f;
-        params.cos_normal_tolerance = 0.9f;
-        check_against_brute(vs, map, params);
-    }
+                counter(o.brute, "photon_sample_tests"), counter(o.method, "photon_sample_tests"),
+                counter(o.method, "grid_cells"), counter(o.method, "cell_visits"));
 }
 
 // Photons exactly on cell faces, edges and corners, and at distance exactly r (and one ulp inside and
@@ -232,12 +79,8 @@ TEST(GatherSplat, PhotonsOnCellBoundariesAndAtDistanceExactlyR) {
     }
     PhotonMap map;
     auto add = [&](const glm::vec3& position) {
-        Photon p{};
-        p.position = position;
-        p.wi = glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f));
-        p.normal = glm::vec3(0, 0, 1);
-        p.power = glm::vec3(1.0f + 0.001f * float(map.photons.size() % 7));
-        map.photons.push_back(p);
+        const glm::vec3 power(1.0f + 0.001f * float(map.photons.size() % 7));
+        map.photons.push_back(photon_at(position, glm::normalize(glm::vec3(0.1f, 0.2f, 1.0f)), power));
     };
     add(glm::vec3(-10.0f, -10.0f, -10.0f));  // the grid's lower corner: cell boundaries at −10 + k·r
     for (int i = 0; i <= 16; ++i)
@@ -262,7 +105,7 @@ TEST(GatherSplat, PhotonsOnCellBoundariesAndAtDistanceExactlyR) {
     }
     map.emitted = map.photons.size();
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        const Outcome o = check_against_brute(vs, map, params_for(r, map, kernel));
+        const Comparison o = check_against_brute(vs, map, splat_params(r, map, kernel));
         print(std::string("cell boundaries, |x-p| = r, ") + to_string(kernel), o);
         EXPECT_GT(counter(o.brute, "contributing_pairs"), 0.0);
         EXPECT_EQ(o.identical, o.samples);
@@ -274,14 +117,14 @@ TEST(GatherSplat, PhotonsOnCellBoundariesAndAtDistanceExactlyR) {
 TEST(GatherSplat, FarFromTheOrigin) {
     for (const glm::vec3& offset : {glm::vec3(0.0f), glm::vec3(1e5f, -1e5f, 3e4f)}) {
         std::mt19937 rng(29);
-        Synthetic options;
+        SyntheticOptions options = gather_scene();
         options.origin = glm::vec3(1e5f, 1e5f, -1e5f);
         options.offset = offset;
-        const ViewSamples vs = make_samples(options, rng);
-        const PhotonMap map = make_photons(vs, 2000, 0.4f, rng);
+        const ViewSamples vs = synthetic_view_samples(options, rng);
+        const PhotonMap map = synthetic_photons(vs, 2000, 0.4f, rng);
         for (float radius : {0.02f, 0.3f}) {
             SCOPED_TRACE("offset " + std::to_string(offset.x) + " radius " + std::to_string(radius));
-            const Outcome o = check_against_brute(vs, map, params_for(radius, map));
+            const Comparison o = check_against_brute(vs, map, splat_params(radius, map));
             print("far, offset " + std::to_string(offset.x) + " r " + std::to_string(radius), o);
             EXPECT_GT(counter(o.brute, "contributing_pairs"), 0.0);
         }
@@ -292,10 +135,10 @@ TEST(GatherSplat, FarFromTheOrigin) {
 // cell size is raised there, nothing overflows, and photons coincident with samples are still found.
 TEST(GatherSplat, TinyRadiusAgainstAHugeExtent) {
     std::mt19937 rng(31);
-    Synthetic options;
+    SyntheticOptions options = gather_scene();
     options.max_depth = 500.0f;
-    const ViewSamples vs = make_samples(options, rng);
-    PhotonMap map = make_photons(vs, 1500, 50.0f, rng);
+    const ViewSamples vs = synthetic_view_samples(options, rng);
+    PhotonMap map = synthetic_photons(vs, 1500, 50.0f, rng);
     for (size_t i = 0; i < vs.samples.size(); i += 5) {  // some exactly on samples
         Photon p = map.photons[i % map.photons.size()];
         p.position = vs.origin + vs.samples[i].position;
@@ -307,7 +150,7 @@ TEST(GatherSplat, TinyRadiusAgainstAHugeExtent) {
     map.photons.back().position = glm::vec3(-1e6f, 2e6f, 1e6f);  // stretches the extent to ~3e6
     for (float radius : {1e-7f, 1e-18f}) {  // (r² must stay above float underflow, or nothing passes)
         SCOPED_TRACE("radius " + std::to_string(radius));
-        const Outcome o = check_against_brute(vs, map, params_for(radius, map));
+        const Comparison o = check_against_brute(vs, map, splat_params(radius, map));
         EXPECT_GT(counter(o.brute, "contributing_pairs"), 0.0);
         EXPECT_EQ(o.identical, o.samples);
     }
@@ -315,47 +158,45 @@ TEST(GatherSplat, TinyRadiusAgainstAHugeExtent) {
 
 TEST(GatherSplat, ManyPhotonsAtOnePoint) {
     std::mt19937 rng(43);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    PhotonMap map = make_photons(vs, 2000, 0.0f, rng);
+    const ViewSamples vs = synthetic_view_samples(gather_scene(), rng);
+    PhotonMap map = synthetic_photons(vs, 2000, 0.0f, rng);
     for (Photon& p : map.photons) p.position = map.photons[0].position;
     for (float radius : {1e-3f, 0.3f}) {
-        const Outcome o = check_against_brute(vs, map, params_for(radius, map));
-        EXPECT_EQ(counter(o.gather, "grid_cells"), 1.0);
+        const Comparison o = check_against_brute(vs, map, splat_params(radius, map));
+        EXPECT_EQ(counter(o.method, "grid_cells"), 1.0);
         if (radius == 0.3f) EXPECT_GT(counter(o.brute, "contributing_pairs"), 0.0);
     }
     // And many at one point among others: a crowded cell next to sparse ones.
-    PhotonMap mixed = make_photons(vs, 2000, 0.5f, rng);
+    PhotonMap mixed = synthetic_photons(vs, 2000, 0.5f, rng);
     for (size_t i = 0; i < mixed.photons.size(); i += 2) mixed.photons[i].position = mixed.photons[1].position;
-    check_against_brute(vs, mixed, params_for(0.3f, mixed));
+    check_against_brute(vs, mixed, splat_params(0.3f, mixed));
 }
 
 // Photons and samples with NaN or infinite positions can pass no test; they must not break the grid.
 TEST(GatherSplat, NonFinitePositions) {
     std::mt19937 rng(47);
-    ViewSamples vs = make_samples(Synthetic{}, rng);
-    PhotonMap map = make_photons(vs, 2000, 0.5f, rng);
+    ViewSamples vs = synthetic_view_samples(gather_scene(), rng);
+    PhotonMap map = synthetic_photons(vs, 2000, 0.5f, rng);
     map.photons[3].position = glm::vec3(NAN, 0.0f, 0.0f);
     map.photons[10].position = glm::vec3(0.0f, INFINITY, 0.0f);
     map.photons[11].position = glm::vec3(0.0f, 0.0f, -INFINITY);
     vs.samples[5].position = glm::vec3(NAN);
     vs.samples[6].position = glm::vec3(INFINITY, 0.0f, 0.0f);
-    check_against_brute(vs, map, params_for(0.3f, map));
+    check_against_brute(vs, map, splat_params(0.3f, map));
 }
 
 // Candidate lists longer than a cancel-check block (64 Ki photons) and made of many cells: the blocks of one
 // sample and the merge of many long runs must keep the ascending order.
 TEST(GatherSplat, LongCandidateListsFromManyCells) {
     std::mt19937 rng(53);
-    Synthetic options;
-    options.width = 16;
-    options.height = 12;
+    SyntheticOptions options = sized(16, 12);
     options.planes = 1;
     options.min_depth = options.max_depth = 2.0f;
     options.specular_fraction = 0.0;
-    const ViewSamples vs = make_samples(options, rng);
-    const PhotonMap map = make_photons(vs, 100000, 0.3f, rng);
-    const Outcome o = check_against_brute(vs, map, params_for(0.9f, map));
-    EXPECT_GT(counter(o.gather, "grid_cells"), 8.0);
+    const ViewSamples vs = synthetic_view_samples(options, rng);
+    const PhotonMap map = synthetic_photons(vs, 100000, 0.3f, rng);
+    const Comparison o = check_against_brute(vs, map, splat_params(0.9f, map));
+    EXPECT_GT(counter(o.method, "grid_cells"), 8.0);
     // The middle sample alone tests more photons than a block holds.
     ViewSamples middle = vs;
     const uint32_t centre = uint32_t(options.height / 2 * options.width + options.width / 2);
@@ -365,7 +206,7 @@ TEST(GatherSplat, LongCandidateListsFromManyCells) {
     middle.samples.assign(1, *it);
     RenderControl control;
     Stats stats;
-    splat_gather(middle, map, params_for(0.9f, map), control, stats);
+    splat_gather(middle, map, splat_params(0.9f, map), control, stats);
     EXPECT_GT(counter(stats, "photon_sample_tests"), 65536.0);
     EXPECT_EQ(o.identical, o.samples);
     print("long lists", o);
@@ -375,65 +216,20 @@ TEST(GatherSplat, LongCandidateListsFromManyCells) {
 // result must not depend on which list a thread held before.
 TEST(GatherSplat, SamplesInRandomOrder) {
     std::mt19937 rng(57);
-    ViewSamples vs = make_samples(Synthetic{}, rng);
+    ViewSamples vs = synthetic_view_samples(gather_scene(), rng);
     std::shuffle(vs.samples.begin(), vs.samples.end(), rng);
-    const PhotonMap map = make_photons(vs, 3000, 0.5f, rng);
-    const Outcome o = check_against_brute(vs, map, params_for(0.2f, map));
-    EXPECT_GT(counter(o.gather, "gather_lists"), 0.5 * double(vs.samples.size()));
+    const PhotonMap map = synthetic_photons(vs, 3000, 0.5f, rng);
+    const Comparison o = check_against_brute(vs, map, splat_params(0.2f, map));
+    EXPECT_GT(counter(o.method, "gather_lists"), 0.5 * double(vs.samples.size()));
     EXPECT_EQ(o.identical, o.samples);
-}
-
-TEST(GatherSplat, ZeroPhotonsAndZeroSamples) {
-    std::mt19937 rng(3);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    PhotonMap none;  // emitted 0 too: fine when nothing was stored
-    RenderControl control;
-    Stats stats;
-    const std::vector<glm::vec3> out = splat_gather(vs, none, params_for(0.3f, none), control, stats);
-    ASSERT_EQ(out.size(), vs.samples.size());
-    for (const glm::vec3& v : out) EXPECT_EQ(v, glm::vec3(0.0f));
-    EXPECT_EQ(counter(stats, "contributing_pairs"), 0.0);
-    EXPECT_EQ(counter(stats, "grid_cells"), 0.0);
-
-    ViewSamples empty;
-    empty.width = empty.height = 4;
-    const PhotonMap map = make_photons(vs, 100, 0.1f, rng);
-    EXPECT_TRUE(splat_gather(empty, map, params_for(0.3f, map), control, stats).empty());
-}
-
-TEST(GatherSplat, SameOutputAndCountersWithOneTwoAndEightThreads) {
-    tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 8);
-    std::mt19937 rng(59);
-    Synthetic options;
-    options.width = 96;
-    options.height = 80;
-    const ViewSamples vs = make_samples(options, rng);
-    const PhotonMap map = make_photons(vs, 5000, 0.5f, rng);
-    for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        const SplatParams params = params_for(0.3f, map, kernel);
-        auto run = [&](int threads, Stats& stats) {
-            std::vector<glm::vec3> out;
-            RenderControl control;
-            tbb::task_arena(threads).execute([&] { out = splat_gather(vs, map, params, control, stats); });
-            return out;
-        };
-        Stats one, two, eight;
-        const std::vector<glm::vec3> expected = run(1, one);
-        EXPECT_TRUE(run(2, two) == expected);
-        EXPECT_TRUE(run(8, eight) == expected);
-        for (const char* name : {"photon_sample_tests", "contributing_pairs", "grid_cells", "cell_visits"}) {
-            EXPECT_EQ(counter(two, name), counter(one, name)) << name;
-            EXPECT_EQ(counter(eight, name), counter(one, name)) << name;
-        }
-    }
 }
 
 TEST(GatherSplat, ReportsCountersBytesAndStageTimes) {
     std::mt19937 rng(61);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    const PhotonMap map = make_photons(vs, 3000, 0.5f, rng);
-    const Outcome o = check_against_brute(vs, map, params_for(0.1f, map));
-    const Stats& s = o.gather;
+    const ViewSamples vs = synthetic_view_samples(gather_scene(), rng);
+    const PhotonMap map = synthetic_photons(vs, 3000, 0.5f, rng);
+    const Comparison o = check_against_brute(vs, map, splat_params(0.1f, map));
+    const Stats& s = o.method;
     EXPECT_GT(counter(s, "grid_cells"), 1.0);
     EXPECT_LE(counter(s, "grid_cells"), double(map.photons.size()));
     EXPECT_GT(counter(s, "cell_visits"), double(vs.samples.size()));
@@ -449,61 +245,11 @@ TEST(GatherSplat, ReportsCountersBytesAndStageTimes) {
     print("counters, r 0.1", o);
 }
 
-TEST(GatherSplat, CancelledBeforeStartThrows) {
-    std::mt19937 rng(67);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    const PhotonMap map = make_photons(vs, 500, 0.5f, rng);
-    RenderControl control;
-    control.request_cancel();
-    Stats stats;
-    EXPECT_THROW(splat_gather(vs, map, params_for(0.3f, map), control, stats), Cancelled);
-}
-
-// A radius larger than the scene makes every sample scan every photon (minutes at this size): a cancel must
-// still stop it within a fraction of a second.
-TEST(GatherSplat, StopsPromptlyWhenCancelledMidway) {
-    std::mt19937 rng(71);
-    Synthetic options;
-    options.width = 160;
-    options.height = 120;
-    const ViewSamples vs = make_samples(options, rng);
-    const PhotonMap map = make_photons(vs, 200000, 0.5f, rng);
-    RenderControl control;
-    Stats stats;
-    std::atomic<bool> started{false};
-    std::thread canceller([&] {
-        while (!started) std::this_thread::yield();
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-        control.request_cancel();
-    });
-    const auto start = std::chrono::steady_clock::now();
-    started = true;
-    EXPECT_THROW(splat_gather(vs, map, params_for(1e3f, map), control, stats), Cancelled);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    canceller.join();
-    EXPECT_LT(seconds, 0.5);
-}
-
-TEST(GatherSplat, RefusesBadInput) {
-    std::mt19937 rng(73);
-    const ViewSamples vs = make_samples(Synthetic{}, rng);
-    const PhotonMap map = make_photons(vs, 100, 0.5f, rng);
-    RenderControl control;
-    Stats stats;
-    for (float radius : {0.0f, -1.0f, NAN, INFINITY})
-        EXPECT_THROW(splat_gather(vs, map, params_for(radius, map), control, stats), InvalidInput);
-    SplatParams no_emitted = params_for(0.3f, map);
-    no_emitted.emitted = 0;
-    EXPECT_THROW(splat_gather(vs, map, no_emitted, control, stats), InvalidInput);
-    EXPECT_EQ(splat_method_from_string("gather"), SplatMethod::gather);
-}
-
 // The Cornell box (with its glass and mirror spheres) through the real stages: view samples, photon tracing,
 // then gather against brute on the same photons, some samples seen through glass or the mirror.
 TEST(GatherSplat, CornellBoxStagesIncludingSamplesBehindGlass) {
-    Scene scene;
-    test::build_cornell_box(scene, true);
-    const Camera camera = test::cornell_camera(56, 56);
+    const Scene& scene = cornell_scene();
+    const Camera camera = cornell_camera(56, 56);
     RenderControl control;
     Stats stats;
     const ViewSamples vs = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
@@ -516,44 +262,14 @@ TEST(GatherSplat, CornellBoxStagesIncludingSamplesBehindGlass) {
     ASSERT_GT(via_specular, 20u) << "the comparison must cover samples behind glass and in the mirror";
     const float radius = default_radius(scene, photon_settings.count);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        SplatParams params = params_for(radius, map, kernel);
+        SplatParams params = splat_params(radius, map, kernel);
         params.emitted = map.emitted;
         params.cos_normal_tolerance = 0.5f;
-        const Outcome o = check_against_brute(vs, map, params);
+        const Comparison o = check_against_brute(vs, map, params);
         print(std::string("Cornell box stages, ") + to_string(kernel), o);
         EXPECT_GT(counter(o.brute, "contributing_pairs"), 1000.0);
         EXPECT_EQ(o.identical, o.samples);
     }
-}
-
-// And through render(): the method setting reaches the gather splat, and the image equals brute's.
-TEST(GatherSplat, CornellBoxRenderEqualsBrute) {
-    static Scene* scene = [] {
-        auto* s = new Scene;
-        test::build_cornell_box(*s, true);
-        return s;
-    }();
-    auto render_with = [&](SplatMethod method) {
-        RenderSettings settings;
-        settings.photons = 8000;
-        settings.method = method;
-        settings.seed = 7;
-        settings.kernel = Kernel::epanechnikov;
-        RenderControl control;
-        return render(*scene, test::cornell_camera(40, 40), settings, control);
-    };
-    const RenderResult brute = render_with(SplatMethod::brute);
-    const RenderResult gather = render_with(SplatMethod::gather);
-    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), gather.film[ps::FilmOutput::indirect].size());
-    double sum = 0.0;
-    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
-        const float b = brute.film[ps::FilmOutput::indirect][i], g = gather.film[ps::FilmOutput::indirect][i];
-        EXPECT_LE(std::fabs(b - g), 1e-4f * std::max(std::fabs(b), 1e-6f)) << "component " << i;
-        sum += b;
-    }
-    EXPECT_GT(sum, 0.0);
-    EXPECT_EQ(gather.stats.counters.at("contributing_pairs"), brute.stats.counters.at("contributing_pairs"));
-    EXPECT_GT(gather.stats.counters.at("grid_cells"), 0.0);
 }
 
 // Not a test: gather against cluster at 1920×1080 on the Cornell box with 200k photons, same photons, same run.
@@ -568,9 +284,8 @@ TEST(GatherBenchmark, DISABLED_GatherVersusClusterAt1080p) {
     };
     const uint64_t photon_count = uint64_t(env("PS_BENCH_PHOTONS", 200000));
     const int repeats = int(env("PS_BENCH_REPEATS", 3));
-    Scene scene;
-    test::build_cornell_box(scene, true);
-    const Camera camera = test::cornell_camera(1920, 1080);
+    const Scene& scene = cornell_scene();
+    const Camera camera = cornell_camera(1920, 1080);
     RenderControl control;
     Stats setup;
     const ViewSamples vs = generate_view_samples(scene, camera, ViewSampleSettings{}, control, setup);

@@ -27,6 +27,22 @@ inline void add_quad(Scene& scene, const char* name, glm::vec3 a, glm::vec3 b, g
     scene.add_mesh(mesh);
 }
 
+// A mesh from flat arrays: xyz per vertex, three vertex indices and one material per triangle, optional normals.
+inline void add_mesh(Scene& scene, const char* name, const std::vector<float>& v, const std::vector<int32_t>& t,
+                     const std::vector<int32_t>& m, const std::vector<float>* normals = nullptr,
+                     const glm::dmat4& transform = glm::dmat4(1.0)) {
+    MeshInput mesh;
+    mesh.name = name;
+    mesh.vertices = v.data();
+    mesh.vertex_count = v.size() / 3;
+    mesh.triangles = t.data();
+    mesh.triangle_count = t.size() / 3;
+    mesh.normals = normals ? normals->data() : nullptr;
+    mesh.material_ids = m.data();
+    mesh.transform = transform;
+    scene.add_mesh(mesh);
+}
+
 inline void add_sphere(Scene& scene, const char* name, glm::vec3 center, float radius, uint32_t material,
                        int rings = 24, int segments = 48) {
     std::vector<float> v, n;
@@ -47,15 +63,7 @@ inline void add_sphere(Scene& scene, const char* name, glm::vec3 center, float r
             t.insert(t.end(), {a, b, a + 1, a + 1, b, b + 1});
             m.insert(m.end(), {static_cast<int32_t>(material), static_cast<int32_t>(material)});
         }
-    MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = v.data();
-    mesh.vertex_count = v.size() / 3;
-    mesh.triangles = t.data();
-    mesh.triangle_count = t.size() / 3;
-    mesh.normals = n.data();
-    mesh.material_ids = m.data();
-    scene.add_mesh(mesh);  // degenerate pole triangles are dropped by the scene
+    add_mesh(scene, name, v, t, m, &n);  // degenerate pole triangles are dropped by the scene
 }
 
 // Z up, box [-1,1]×[-1,1]×[0,2] open towards −y, a small point light under the ceiling.
@@ -128,15 +136,7 @@ inline void add_box(Scene& scene, const char* name, glm::vec3 lo, glm::vec3 hi, 
         t.insert(t.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
         m.insert(m.end(), {static_cast<int32_t>(material), static_cast<int32_t>(material)});
     }
-    MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = v.data();
-    mesh.vertex_count = v.size() / 3;
-    mesh.triangles = t.data();
-    mesh.triangle_count = t.size() / 3;
-    mesh.material_ids = m.data();
-    mesh.transform = transform;
-    scene.add_mesh(mesh);
+    add_mesh(scene, name, v, t, m, nullptr, transform);
 }
 
 inline Light point_light(const char* name, glm::vec3 position, float watts, float radius = 0.0f) {
