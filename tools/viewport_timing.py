@@ -10,7 +10,7 @@ the redraw Blender schedules. Times are taken on Blender's main thread when view
     bash tools/viewport_timing.sh            # writes docs/results/viewport_timing.json and prints a summary
 
 Settings measured: the defaults of scene.photonsplat (first image 20k photons at 1/4 resolution, refinement
-passes of 100k photons, 32 passes or 30 s) except viewport_passes, given by PHOTONSPLAT_REFINED_PASSES (8).
+iterations of 100k photons, 32 iterations or 30 s) except viewport_iterations, given by PHOTONSPLAT_REFINED_ITERATIONS (8).
 """
 
 import json
@@ -27,7 +27,7 @@ sys.path.insert(0, str(REPO / "tools"))
 import blender_window as bw     # noqa: E402
 
 MOVES = int(os.environ.get("PHOTONSPLAT_MOVES", "5"))
-REFINED_PASSES = int(os.environ.get("PHOTONSPLAT_REFINED_PASSES", "8"))
+REFINED_ITERATIONS = int(os.environ.get("PHOTONSPLAT_REFINED_ITERATIONS", "8"))
 OUTPUT = Path(os.environ.get("PHOTONSPLAT_TIMING_OUTPUT", REPO / "docs" / "results" / "viewport_timing.json"))
 
 
@@ -39,10 +39,10 @@ def wait_for(predicate, timeout):
         yield 0.01
 
 
-def drawn_after(session, moved_at, restart, passes):
-    """Time from moved_at to the first draw of `passes` passes of a refinement newer than `restart`."""
+def drawn_after(session, moved_at, restart, iterations):
+    """Time from moved_at to the first draw of `iterations` iterations of a refinement newer than `restart`."""
     for when, number, done in session.draw_log:
-        if when >= moved_at and number > restart and done >= passes:
+        if when >= moved_at and number > restart and done >= iterations:
             return when - moved_at
     return None
 
@@ -56,14 +56,14 @@ def measure_moves(session, ob, label):
         ob.location.x += 0.05 if move % 2 == 0 else -0.05
         yield from wait_for(lambda: drawn_after(session, moved_at, restart, 0) is not None, 30)
         first = drawn_after(session, moved_at, restart, 0)
-        yield from wait_for(lambda: drawn_after(session, moved_at, restart, REFINED_PASSES) is not None, 120)
-        refined = drawn_after(session, moved_at, restart, REFINED_PASSES)
+        yield from wait_for(lambda: drawn_after(session, moved_at, restart, REFINED_ITERATIONS) is not None, 120)
+        refined = drawn_after(session, moved_at, restart, REFINED_ITERATIONS)
         sync = session.last_sync
         rows.append(dict(first_image_s=first, refined_s=refined, meshes_exported=sync.meshes,
                          lights_exported=sync.lights, instances_moved=sync.moved, scene_rebuilt=sync.rebuilt,
                          main_thread_wait_s=session.release_seconds))
         print(f"viewport_timing: {label} {move + 1}: first image {first * 1000:.0f} ms, "
-              f"{REFINED_PASSES} passes {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights}, "
+              f"{REFINED_ITERATIONS} iterations {refined:.2f} s (meshes exported {sync.meshes}, lights {sync.lights}, "
               f"instances moved {sync.moved}, scene rebuilt {sync.rebuilt}, main thread waited "
               f"{session.release_seconds * 1000:.0f} ms for the refinement to stop)")
         yield 0.3
@@ -87,7 +87,7 @@ def measure_busy_waits(session, ob):
 def steps():
     scene = bpy.context.scene
     scene.render.engine = 'PHOTONSPLAT'
-    scene.photonsplat.viewport_passes = REFINED_PASSES
+    scene.photonsplat.viewport_iterations = REFINED_ITERATIONS
     window, area, region, space = bw.view3d()
     bw.rendered_through_camera(space)
     yield 0.5
@@ -112,12 +112,12 @@ def steps():
         busy_main_thread_waits_s=busy_waits,
         settings=dict(first_pass_photons=settings.viewport_preview_photons,
                       first_pass_pixel_size=settings.viewport_preview_divider,
-                      photons_per_pass=settings.viewport_photons, refined_passes=REFINED_PASSES,
+                      photons_per_iteration=settings.viewport_photons, refined_iterations=REFINED_ITERATIONS,
                       method=settings.method))
     OUTPUT.parent.mkdir(parents=True, exist_ok=True)
     OUTPUT.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"viewport_timing: region {summary['region']}: first image {summary['first_image_median_s'] * 1000:.0f} ms,"
-          f" refined ({REFINED_PASSES} passes) {summary['refined_median_s']:.2f} s after a light move; object move:"
+          f" refined ({REFINED_ITERATIONS} iterations) {summary['refined_median_s']:.2f} s after a light move; object move:"
           f" first image {summary['object_first_image_median_s'] * 1000:.0f} ms,"
           f" refined {summary['object_refined_median_s']:.2f} s; main-thread wait during a pass: max"
           f" {max(busy_waits) * 1000:.0f} ms (medians of {MOVES}; load average"

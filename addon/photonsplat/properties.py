@@ -17,22 +17,20 @@ PROPERTY = {"int": IntProperty, "float": FloatProperty, "bool": BoolProperty, "e
 
 # The Rendered viewport's settings (not the core's): a fast first image after a change, then refinement.
 VIEWPORT = (
-    ("viewport_preview_photons", "int", dict(
-        name="First Pass Photons", default=20_000, min=0, soft_max=1_000_000,
+    ("viewport_preview_photons", "int", dict(name="First Image Photons", default=20_000, min=0, soft_max=1_000_000,
         description="Photons of the first, fast image after any change in the viewport")),
-    ("viewport_preview_divider", "int", dict(
-        name="First Pass Pixel Size", default=4, min=1, max=16,
+    ("viewport_preview_divider", "int", dict(name="First Image Pixel Size", default=4, min=1, max=16,
         description="The first image after a change is rendered at 1/N of the viewport's resolution")),
-    ("viewport_photons", "int", dict(
-        name="Photons per Pass", default=100_000, min=0, soft_max=10_000_000,
-        description="Photons of each refinement pass in the viewport (at full viewport resolution)")),
-    ("viewport_passes", "int", dict(
-        name="Passes", default=32, min=0, soft_max=1024,
-        description="Refinement passes averaged in the viewport before it stops; 0 = no limit")),
-    ("viewport_time_limit", "float", dict(
-        name="Time Limit", default=30.0, min=0.0, soft_max=600.0, unit='TIME_ABSOLUTE',
+    ("viewport_photons", "int", dict(name="Photons per Iteration", default=100_000, min=0, soft_max=10_000_000,
+        description="Photons of each refinement iteration in the viewport (at full viewport resolution)")),
+    ("viewport_iterations", "int", dict(name="Iterations", default=32, min=0, soft_max=1024,
+        description="Refinement iterations averaged in the viewport before it stops; 0 = no limit")),
+    ("viewport_time_limit", "float", dict(name="Time Limit", default=30.0, min=0.0, soft_max=600.0, unit='TIME_ABSOLUTE',
         description="Seconds of refinement after a change before the viewport stops; 0 = no limit")),
 )
+
+# Viewport settings stored under an older name by files of earlier versions: {old name: new name}.
+VIEWPORT_RENAMED = {"viewport_passes": "viewport_iterations"}
 
 
 def _scene_settings_class():
@@ -48,7 +46,7 @@ def migrate_renamed_settings(_=None):
     """A file saved when a setting had its old name stores the value under that name: move it to the new one."""
     for scene in bpy.data.scenes:
         props = scene.photonsplat
-        for old, new in settings.renamed().items():
+        for old, new in {**settings.renamed(), **VIEWPORT_RENAMED}.items():
             if old in props.keys():
                 props[new] = props[old]
                 del props[old]

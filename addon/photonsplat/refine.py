@@ -1,4 +1,4 @@
-"""Progressive refinement of one view, on a background thread: a fast first image, then photon passes averaged
+"""Progressive refinement of one view, on a background thread: a fast first image, then photon iterations averaged
 until a pass count or time limit. No bpy here: Blender's viewport (viewport.py) and the tests drive it alike.
 
 The native calls release the GIL, so Blender's UI keeps running while a pass renders. Stopping never blocks:
@@ -15,11 +15,11 @@ import numpy as np
 
 @dataclass(frozen=True)
 class RefineSettings:
-    render: dict                 # core RenderSettings fields (photons, passes and time_limit set here)
+    render: dict                 # core RenderSettings fields (photons, iterations and time_limit set here)
     preview_photons: int = 20_000
     preview_divider: int = 4     # the first image is rendered at 1/divider of the resolution
-    photons_per_pass: int = 100_000
-    max_passes: int = 32         # 0 = no limit
+    photons_per_iteration: int = 100_000
+    max_iterations: int = 32         # 0 = no limit
     time_limit: float = 30.0     # seconds; 0 = no limit
 
 
@@ -28,7 +28,7 @@ class Frame:
     """One image to show. pixels: float32 (height, width, 4) linear premultiplied RGBA, row 0 at the BOTTOM
     (what a GPU texture wants)."""
     pixels: np.ndarray
-    passes: int          # refinement passes averaged in; 0 = the fast first image
+    iterations: int      # refinement iterations averaged in; 0 = the fast first image
     seconds: float       # since the refinement started (i.e. since the change that caused it)
     version: int         # increases with every new frame
 
@@ -46,9 +46,9 @@ MAX_CORE_ITERATIONS = 1_000_000
 
 def refined_images(core, scene, camera, settings, progress):
     """Yields the running mean after each refinement pass, forever (the caller stops): the core's progressive
-    render, whose passes trace new photons with a shrinking radius, so the mean converges to the exact image."""
-    fields = dict(settings.render, photons=settings.photons_per_pass, time_limit=0.0,
-                  iterations=settings.max_passes or MAX_CORE_ITERATIONS)
+    render, whose iterations trace new photons with a shrinking radius, so the mean converges to the exact image."""
+    fields = dict(settings.render, photons=settings.photons_per_iteration, time_limit=0.0,
+                  iterations=settings.max_iterations or MAX_CORE_ITERATIONS)
     progressive = core.Progressive(scene, camera, core.RenderSettings(**fields))
     while True:
         progressive.step(progress=progress)
@@ -100,10 +100,10 @@ class Refinement:
     def _cancel_requested(self, stage=None, fraction=None):
         return self._stop.is_set()
 
-    def _publish(self, pixels, passes):
+    def _publish(self, pixels, iterations):
         with self._lock:
             version = 1 + (self._latest.version if self._latest else 0)
-            self._latest = Frame(pixels=pixels, passes=passes, seconds=time.perf_counter() - self._started,
+            self._latest = Frame(pixels=pixels, iterations=iterations, seconds=time.perf_counter() - self._started,
                                  version=version)
             frame = self._latest
         if self._on_frame is not None:
@@ -125,7 +125,7 @@ class Refinement:
             for mean in refined_images(core, self._scene, camera, settings, self._cancel_requested):
                 done += 1
                 self._publish(np.ascontiguousarray(mean[::-1]), done)
-                if self._stop.is_set() or (settings.max_passes and done >= settings.max_passes):
+                if self._stop.is_set() or (settings.max_iterations and done >= settings.max_iterations):
                     break
                 if settings.time_limit and time.perf_counter() - self._started >= settings.time_limit:
                     break

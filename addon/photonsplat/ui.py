@@ -30,6 +30,13 @@ class PhotonSplatPanel:
         return context.engine in cls.COMPAT_ENGINES
 
 
+class DataBlockPanel(PhotonSplatPanel):
+    """Mix-in: a panel of the context's `context_member` data block, drawn by draw_block(layout, block)."""
+
+    def draw(self, context):
+        self.draw_block(self.layout, getattr(context, self.context_member))
+
+
 def _draw_core_status(layout):
     """An error box when the native module cannot be loaded (the add-on stays usable otherwise)."""
     try:
@@ -84,7 +91,7 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         if settings.method == "directional":
             col.prop(settings, "directional_level")
         col = layout.column()
-        col.prop(settings, "passes")
+        col.prop(settings, "iterations")
         col.prop(settings, "time_limit")
         col = layout.column()
         col.prop(settings, "max_bounces")
@@ -117,7 +124,7 @@ class RENDER_PT_photonsplat_viewport(PhotonSplatPanel, Panel):
         col.prop(settings, "viewport_preview_divider", text="Pixel Size")
         col = layout.column(heading="Refinement")
         col.prop(settings, "viewport_photons", text="Photons per Pass")
-        col.prop(settings, "viewport_passes", text="Passes")
+        col.prop(settings, "viewport_iterations", text="Iterations")
         col.prop(settings, "viewport_time_limit", text="Time Limit")
 
 
@@ -151,14 +158,12 @@ class VIEWLAYER_PT_photonsplat_passes(PhotonSplatPanel, Panel):
 
 # --- lights, materials, world ---------------------------------------------------------------------------------
 
-class DATA_PT_photonsplat_light(PhotonSplatPanel, Panel):
+class DATA_PT_photonsplat_light(DataBlockPanel, Panel):
     bl_label = "Light"
     bl_context = "data"
     context_member = "light"
 
-    def draw(self, context):
-        light = context.light
-        layout = self.layout
+    def draw_block(self, layout, light):
         layout.row().prop(light, "type", expand=True)
         _property_split(layout)
         col = layout.column()
@@ -190,15 +195,23 @@ def _draw_surface_nodes(layout, id_block, fallback_property):
         layout.prop(id_block, fallback_property, text="Color")
 
 
-class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
+class SurfacePanel(DataBlockPanel):
+    """Mix-in: the Surface of a material or a world as Cycles' panel shows it, then what Photon Splat makes of it
+    (draw_interpretation)."""
     bl_label = "Surface"
+    fallback_property = None  # what the panel shows without nodes
+
+    def draw_block(self, layout, block):
+        _draw_surface_nodes(layout, block, fallback_property=self.fallback_property)
+        self.draw_interpretation(layout, block)
+
+
+class MATERIAL_PT_photonsplat_surface(SurfacePanel, Panel):
     bl_context = "material"
     context_member = "material"
+    fallback_property = "diffuse_color"
 
-    def draw(self, context):
-        material = context.material
-        layout = self.layout
-        _draw_surface_nodes(layout, material, fallback_property="diffuse_color")
+    def draw_interpretation(self, layout, material):
         # Say how Photon Splat interprets this material, with what it had to approximate.
         spec = materials.convert_material(material)
         layout.separator()
@@ -206,17 +219,16 @@ class MATERIAL_PT_photonsplat_surface(PhotonSplatPanel, Panel):
         _draw_notes(layout, spec.notes)
 
 
-class WORLD_PT_photonsplat_surface(PhotonSplatPanel, Panel):
-    bl_label = "Surface"
+class WORLD_PT_photonsplat_surface(SurfacePanel, Panel):
     bl_context = "world"
     context_member = "world"
+    fallback_property = "color"
 
-    def draw(self, context):
-        _draw_surface_nodes(self.layout, context.world, fallback_property="color")
+    def draw_interpretation(self, layout, world_block):
         # What the export approximates of this world (environment textures, sky models...).
         notes = []
-        world.background_radiance(context.world, notes)
-        _draw_notes(self.layout, notes)
+        world.background_radiance(world_block, notes)
+        _draw_notes(layout, notes)
 
 
 # --- Blender's own panels ------------------------------------------------------------------------------------

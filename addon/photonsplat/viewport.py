@@ -48,7 +48,7 @@ def refine_settings(core, scene):
     core.RenderSettings(**render)       # validate now: a bad value is reported, not raised in the thread
     return refine.RefineSettings(render=render, preview_photons=props.viewport_preview_photons,
                                  preview_divider=props.viewport_preview_divider,
-                                 photons_per_pass=props.viewport_photons, max_passes=props.viewport_passes,
+                                 photons_per_iteration=props.viewport_photons, max_iterations=props.viewport_iterations,
                                  time_limit=props.viewport_time_limit)
 
 
@@ -89,7 +89,7 @@ class ViewportSession:
         self._texture_version = None
         self._engine = None
         self.restarts = 0             # refinements started so far (numbers them)
-        # (time.perf_counter(), restart number, passes) each time view_draw shows a new image: how long a
+        # (time.perf_counter(), restart number, iterations) each time view_draw shows a new image: how long a
         # change takes to reach the screen (tools/viewport_timing.py reads it).
         self.draw_log = collections.deque(maxlen=1024)
         _sessions.add(self)
@@ -151,7 +151,7 @@ class ViewportSession:
             buffer = gpu.types.Buffer('FLOAT', width * height * 4, frame.pixels.reshape(-1))
             self._texture = gpu.types.GPUTexture((width, height), format='RGBA16F', data=buffer)
             self._texture_version = (self.restarts, frame.version)
-            self.draw_log.append((time.perf_counter(), self.restarts, frame.passes))
+            self.draw_log.append((time.perf_counter(), self.restarts, frame.iterations))
         if self._texture is None:
             return
         # Until the first image of a restarted refinement arrives, the previous image stays on screen.
@@ -182,9 +182,9 @@ class ViewportSession:
         if frame is None:
             return "Rendering first image"
         if refinement.finished:
-            return f"Done: {frame.passes} passes, {frame.seconds:.1f} s"
-        limit = f"/{self.settings.max_passes}" if self.settings.max_passes else ""
-        return f"Pass {frame.passes}{limit} | {frame.seconds:.1f} s"
+            return f"Done: {frame.iterations} iterations, {frame.seconds:.1f} s"
+        limit = f"/{self.settings.max_iterations}" if self.settings.max_iterations else ""
+        return f"Iteration {frame.iterations}{limit} | {frame.seconds:.1f} s"
 
     # --- the background work ----------------------------------------------------------------------------
     def restart(self):

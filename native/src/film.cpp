@@ -1,6 +1,6 @@
 #include "photonsplat/film.h"
 
-#include "photonsplat/errors.h"
+#include "photonsplat/named_rows.h"
 
 namespace ps {
 
@@ -32,12 +32,7 @@ const std::array<FilmOutputInfo, kFilmOutputCount>& film_outputs() {
 const FilmOutputInfo& film_output_info(FilmOutput output) { return film_outputs()[static_cast<size_t>(output)]; }
 
 FilmOutput film_output_from_string(const std::string& name) {
-    std::string known;
-    for (const FilmOutputInfo& info : film_outputs()) {
-        if (name == info.name) return info.output;
-        known += known.empty() ? info.name : std::string(", ") + info.name;
-    }
-    throw InvalidInput("outputs", "'" + name + "' is not one of: " + known);
+    return row_named(film_outputs(), name, "outputs").output;
 }
 
 std::vector<std::string> film_output_names(FilmOutputSet set) {

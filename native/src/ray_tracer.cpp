@@ -180,8 +180,11 @@ void RayTracer::measure_reach(const std::vector<Instance>& instances) {
 
 // A ray whose origin lies too far for every instance's space to hold it (a camera or a light absurdly far from a
 // mesh scaled down) is moved forward to where it enters the scene's box, since nothing lies before that; `shift`
-// says by how much. False when it misses the box or the box itself is out of reach. Ordinary rays are untouched.
-bool RayTracer::clip_to_scene(Ray& ray, float& t_min, float& t_max, float& shift) const {
+// says by how much. False when it misses the box or the box itself is out of reach, or when Embree would refuse the
+// ray (embree_accepts). Ordinary rays are untouched.
+bool RayTracer::clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const {
+    if (!embree_accepts(original, t_min, t_max)) return false;
+    ray = original;
     constexpr double kReach = 1e17;  // an order of magnitude inside Embree's limit
     const auto reachable = [&](const glm::vec3& o) {
         const double far = std::max(std::fabs(double(o.x)), std::max(std::fabs(double(o.y)), std::fabs(double(o.z))));
@@ -206,45 +209,10 @@ bool RayTracer::clip_to_scene(Ray& ray, float& t_min, float& t_max, float& shift
     return t_min <= t_max && reachable(ray.origin);
 }
 
-bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hit, uint32_t rays) const {
-    if (!embree_accepts(original, t_min, t_max)) return false;
-    Ray ray = original;
-    float shift = 0.0f;
-    if (!clip_to_scene(ray, t_min, t_max, shift)) return false;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.origin.x;
-    rh.ray.org_y = ray.origin.y;
-    rh.ray.org_z = ray.origin.z;
-    rh.ray.dir_x = ray.direction.x;
-    rh.ray.dir_y = ray.direction.y;
-    rh.ray.dir_z = ray.direction.z;
-    rh.ray.tnear = t_min;
-    rh.ray.tfar = t_max;
-    rh.ray.time = 0.0f;
-    rh.ray.mask = rays;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->top, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
-    hit.t = rh.ray.tfar + shift;
-    hit.instance = rh.hit.instID[0];
-    hit.triangle = rh.hit.primID;
-    hit.u = rh.hit.u;
-    hit.v = rh.hit.v;
-    return true;
-}
+namespace {
 
-bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t rays) const {
-    if (!embree_accepts(original, t_min, t_max)) return false;
-    Ray ray = original;
-    float shift = 0.0f;
-    if (!clip_to_scene(ray, t_min, t_max, shift)) return false;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
+// Embree's ray for the part [t_min, t_max] of `ray`, seen by the instances whose mask shares a bit with `rays`.
+RTCRay embree_ray(const Ray& ray, float t_min, float t_max, uint32_t rays) {
     RTCRay r;
     r.org_x = ray.origin.x;
     r.org_y = ray.origin.y;
@@ -258,6 +226,38 @@ bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t
     r.mask = rays;
     r.id = 0;
     r.flags = 0;
+    return r;
+}
+
+}  // namespace
+
+bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hit, uint32_t rays) const {
+    Ray ray;
+    float shift = 0.0f;
+    if (!clip_to_scene(original, t_min, t_max, ray, shift)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    rh.ray = embree_ray(ray, t_min, t_max, rays);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->top, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
+    hit.t = rh.ray.tfar + shift;
+    hit.instance = rh.hit.instID[0];
+    hit.triangle = rh.hit.primID;
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    return true;
+}
+
+bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t rays) const {
+    Ray ray;
+    float shift = 0.0f;
+    if (!clip_to_scene(original, t_min, t_max, ray, shift)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay r = embree_ray(ray, t_min, t_max, rays);
     rtcOccluded1(impl_->top, &context, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
 }

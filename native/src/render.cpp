@@ -159,18 +159,12 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
     stats.values["photons"] = static_cast<double>(settings.photons);
     stats.values["width"] = camera.width();
     stats.values["height"] = camera.height();
-    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
-    stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
-    stats.counters["lights"] = static_cast<double>(scene.lights().size());
 
     tbb::task_arena arena(settings.threads > 0 ? settings.threads : tbb::task_arena::automatic);
     arena.execute([&] {
         StageTimer total(stats, "total");
         control.begin_stage("scene", 0.0, 0.02);
-        {
-            StageTimer t(stats, "scene_build");
-            stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
-        }
+        report_scene(scene, stats);
         control.check();
 
         // 1. View samples: camera paths to their first diffuse or glossy hit.

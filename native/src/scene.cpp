@@ -11,6 +11,7 @@
 
 #include "photonsplat/errors.h"
 #include "photonsplat/ray_tracer.h"
+#include "photonsplat/stats.h"
 #include "photonsplat/validation.h"
 
 namespace ps {
@@ -431,6 +432,14 @@ const RayTracer& Scene::ray_tracer() const {
     }
     moved_instances_.clear();
     return *ray_tracer_;
+}
+
+void report_scene(const Scene& scene, Stats& stats) {
+    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
+    stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
+    stats.counters["lights"] = static_cast<double>(scene.lights().size());
+    StageTimer t(stats, "scene_build");
+    stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
 }
 
 }  // namespace ps

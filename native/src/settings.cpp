@@ -20,6 +20,11 @@ std::optional<SettingBound> inclusive(double value) { return SettingBound{value,
 std::optional<SettingBound> exclusive(double value) { return SettingBound{value, true}; }
 constexpr std::nullopt_t none = std::nullopt;
 
+// A row without a range or a note: a switch, a choice, a set, or a number every value of which is valid.
+Setting unbounded(const char* name, SettingMember member, const char* description) {
+    return {name, member, none, none, SettingUnit::none, "", description};
+}
+
 // --- enumerations: the names of their choices, in the enum's order ------------------------------------------
 
 std::vector<std::string> choice_names(SplatMethod) { return splat_method_names(); }
@@ -82,11 +87,11 @@ const std::vector<Setting>& render_settings_table() {
         {"radius", &S::radius, inclusive(0), none, U::length, "0 = automatic",
          "Splatting radius of each photon in world units; 0 chooses it from the size of the scene and the photon "
          "count"},
-        {"method", &S::method, none, none, U::none, "", "How photons are splatted onto the pixels they light"},
+        unbounded("method", &S::method, "How photons are splatted onto the pixels they light"),
         {"max_bounces", &S::max_bounces, inclusive(0), inclusive(1000), U::none, "",
          "Longest photon path, and the deepest chain of mirror/glass bounces followed from the camera"},
-        {"seed", &S::seed, none, none, U::none, "",
-         "Random seed; the same seed gives the same image whatever the number of threads"},
+        unbounded("seed", &S::seed,
+         "Random seed; the same seed gives the same image whatever the number of threads"),
         {"threads", &S::threads, inclusive(0), inclusive(4096), U::none, "0 = all cores",
          "Number of CPU threads; 0 uses all cores"},
         {"direct_samples", &S::direct_samples, inclusive(1), inclusive(4096), U::none, "",
@@ -95,31 +100,31 @@ const std::vector<Setting>& render_settings_table() {
          "Photons on surfaces turned further than this from a pixel's surface are ignored"},
         {"plane_distance", &S::plane_distance, inclusive(0), none, U::none, "0 = off",
          "Photons farther from a pixel's surface plane than this many radii are ignored (stacked surfaces); 0 = off"},
-        {"kernel", &S::kernel, none, none, U::none, "",
-         "Density-estimation kernel: how a photon's light is spread over its radius"},
-        {"boundary_correction", &S::boundary_correction, none, none, U::none, "",
+        unbounded("kernel", &S::kernel,
+         "Density-estimation kernel: how a photon's light is spread over its radius"),
+        unbounded("boundary_correction", &S::boundary_correction,
          "Divide each pixel's bounced light by the part of its kernel that lies on a surface like its own, so "
          "corners, edges and thin parts are not darkened (glossy surfaces and Directional's approximate iterations "
-         "excepted); off gives the paper's plain estimate"},
+         "excepted); off gives the paper's plain estimate"),
         {"directional_level", &S::directional_level, inclusive(-1), inclusive(64), U::none, "-1 = chosen from the radius",
          "Directional method only: hierarchy level (from the leaves) where photons stop; -1 chooses it from the "
          "radius"},
         {"memory_budget", &S::memory_budget, none, none, U::bytes, "0 = 3/4 of available memory",
          "Memory a render may hold; a render whose structures would not fit is refused before allocating, naming "
          "what to lower; 0 uses three quarters of this machine's memory"},
-        {"guide_photons", &S::guide_photons, none, none, U::none, "",
-         "Emit sun photons where pilot paths found them stored, weighted so that the image stays unbiased"},
+        unbounded("guide_photons", &S::guide_photons,
+         "Emit sun photons where pilot paths found them stored, weighted so that the image stays unbiased"),
         {"aimed_photons", &S::aimed_photons, inclusive(0), inclusive(16), U::none, "a fraction of photons; 0 = off",
          "Extra photons per iteration aimed at mirror and glass objects from point, spot and area lights, as a "
          "fraction of photons; they add caustic photons only, weighted so that the image stays unbiased; 0 = off"},
-        {"outputs", &S::outputs, none, none, U::none, "",
+        unbounded("outputs", &S::outputs,
          "The images the render produces (combined always): fewer hold less memory, above all in a progressive "
-         "render's running sums"},
-        {"caustics_pass", &S::caustics_pass, none, none, U::none, "",
+         "render's running sums"),
+        unbounded("caustics_pass", &S::caustics_pass,
          "Also splat the caustic photons (light, then mirrors/glass, then a diffuse surface) alone into a caustics "
-         "image"},
-        {"transparent", &S::transparent, none, none, U::none, "",
-         "Film transparency: alpha 0 and no background where camera rays escape to the world"},
+         "image"),
+        unbounded("transparent", &S::transparent,
+         "Film transparency: alpha 0 and no background where camera rays escape to the world"),
         {"iterations", &S::iterations, inclusive(0), inclusive(kMaxIterations), U::none, "0 = until time_limit",
          "Progressive iterations, each with new photons, a smaller radius and jittered pixels, averaged: 1 = the "
          "one-shot method, 0 = as many as fit in the time limit",
@@ -236,14 +241,7 @@ void Setting::set(RenderSettings& settings, const SettingValue& value) const {
             } else if constexpr (std::is_same_v<T, FilmOutputSet>) {
                 const auto* names = std::get_if<std::vector<std::string>>(&value);
                 if (!names) refuse(requirement());
-                FilmOutputSet set{};
-                for (const std::string& name : *names) {
-                    bool known = false;
-                    for (const FilmOutputInfo& info : film_outputs())
-                        if (name == info.name) set |= film_bit(info.output), known = true;
-                    if (!known) refuse(requirement());
-                }
-                settings.*m = set;
+                settings.*m = film_output_set(*names);  // an unknown name is refused naming the known ones
             } else if constexpr (std::is_enum_v<T>) {
                 if (!std::holds_alternative<std::string>(value)) refuse(requirement());
                 for (const std::string& choice : choice_names(T{}))

@@ -87,10 +87,21 @@ class RecordingLayout:
         return lambda *args, **kwargs: self
 
 
+class PanelStandIn:
+    """What Blender passes a panel's draw() as self: its layout, and the panel class's attributes and methods."""
+
+    def __init__(self, panel_class, layout):
+        self.panel_class, self.layout = panel_class, layout
+
+    def __getattr__(self, name):
+        value = getattr(self.panel_class, name)
+        return value.__get__(self) if callable(value) and hasattr(value, "__get__") else value
+
+
 def draw(panel_class, **context):
     from types import SimpleNamespace
     layout = RecordingLayout()
-    panel_class.draw(SimpleNamespace(layout=layout), SimpleNamespace(engine="PHOTONSPLAT", **context))
+    panel_class.draw(PanelStandIn(panel_class, layout), SimpleNamespace(engine="PHOTONSPLAT", **context))
     return layout
 
 

@@ -240,7 +240,7 @@ def test_session_stops_its_refinement_before_moving_an_instance(caustics_scene, 
     session._make_camera = viewport.view_camera_factory(
         core, cam.matrix_world.normalized().inverted(),
         cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=48, y=48))
-    session.settings = replace(session.settings, photons_per_pass=2_000_000, max_passes=0, time_limit=0.0)
+    session.settings = replace(session.settings, photons_per_iteration=2_000_000, max_iterations=0, time_limit=0.0)
     session.restart()
     first, scene = session.refinement, session.scene
     time.sleep(0.3)                                    # inside a long pass
@@ -300,25 +300,25 @@ def refinement_for(core, width=48, height=48, **limits):
                              on_frame=frames.append), frames
 
 
-def test_refinement_first_image_then_averaged_passes(caustics_scene, core):
-    job, frames = refinement_for(core, preview_photons=2_000, preview_divider=4, photons_per_pass=5_000,
-                                 max_passes=4, time_limit=0.0)
+def test_refinement_first_image_then_averaged_iterations(caustics_scene, core):
+    job, frames = refinement_for(core, preview_photons=2_000, preview_divider=4, photons_per_iteration=5_000,
+                                 max_iterations=4, time_limit=0.0)
     job.start()
-    assert job.join(60.0), "the refinement did not finish its 4 passes"
+    assert job.join(60.0), "the refinement did not finish its 4 iterations"
     assert job.error is None and job.finished
-    assert [f.passes for f in frames] == [0, 1, 2, 3, 4]
+    assert [f.iterations for f in frames] == [0, 1, 2, 3, 4]
     assert frames[0].pixels.shape == (12, 12, 4)                  # the fast first image: 1/4 resolution
     assert all(f.pixels.shape == (48, 48, 4) for f in frames[1:])
     assert all(np.isfinite(f.pixels).all() and f.pixels[..., :3].mean() > 0.01 for f in frames)
     assert job.first_image_seconds is not None and job.first_image_seconds <= frames[1].seconds
-    # Averaging independent passes: pass-to-pass changes shrink (noise falls as 1/n).
+    # Averaging independent iterations: iteration-to-iteration changes shrink (noise falls as 1/n).
     steps = [np.abs(frames[i + 1].pixels - frames[i].pixels).mean() for i in range(1, 4)]
     assert steps[2] < steps[0]
 
 
 def test_refinement_stops_quickly_when_asked(caustics_scene, core):
-    job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_pass=2_000_000,
-                                 max_passes=0, time_limit=0.0)
+    job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_iteration=2_000_000,
+                                 max_iterations=0, time_limit=0.0)
     job.start()
     deadline = time.perf_counter() + 30.0
     while not frames and time.perf_counter() < deadline:
@@ -334,8 +334,8 @@ def test_refinement_stops_quickly_when_asked(caustics_scene, core):
 
 def test_stop_all_ends_every_viewport_thread(caustics_scene, core):
     """What unregistering the add-on and loading a file do (viewport.unregister, the load_pre handler)."""
-    job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_pass=2_000_000,
-                                 max_passes=0, time_limit=0.0)
+    job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_iteration=2_000_000,
+                                 max_iterations=0, time_limit=0.0)
 
     class Session:                       # stands in for a ViewportSession holding this refinement
         def stop(self):

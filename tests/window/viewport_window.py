@@ -54,7 +54,7 @@ def steps():
     settings = scene.photonsplat
     settings.viewport_preview_photons = 20_000
     settings.viewport_photons = 100_000
-    settings.viewport_passes = 6
+    settings.viewport_iterations = 6
     settings.viewport_time_limit = REFINE_SECONDS
     window, area, region, space = bw.view3d()
     bw.rendered_through_camera(space)
@@ -72,8 +72,8 @@ def steps():
     refinement = session.refinement
     assert refinement is not None and refinement.error is None, refinement and refinement.error
     frame = refinement.latest()
-    assert frame is not None and frame.passes >= 1, "no refined image"
-    print(f"viewport_window: region {region.width}x{region.height}, {frame.passes} passes in "
+    assert frame is not None and frame.iterations >= 1, "no refined image"
+    print(f"viewport_window: region {region.width}x{region.height}, {frame.iterations} iterations in "
           f"{frame.seconds:.1f} s, first image {refinement.first_image_seconds:.2f} s")
     yield 0.5                                   # let Blender draw the last image
 
@@ -107,7 +107,7 @@ def doc_screenshots(window, folder):
     # The panels, readable: the big viewport area turned into a Properties editor for the shots.
     area.type = 'PROPERTIES'
     settings = bpy.context.scene.photonsplat
-    for name in ("viewport_passes", "viewport_time_limit"):     # show the defaults, not the test's limits
+    for name in ("viewport_iterations", "viewport_time_limit"):     # show the defaults, not the test's limits
         settings.property_unset(name)
     yield 0.3
     for context, name in (('RENDER', "panel_render.png"), ('VIEW_LAYER', "panel_passes.png")):

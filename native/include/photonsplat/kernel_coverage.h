@@ -13,10 +13,7 @@
 
 namespace ps {
 
-class Scene;
-class RenderControl;
-struct Stats;
-struct ViewSamples;
+class Scene;  // (splat.h declares the samples, the control and the stats)
 
 // Probes of each view sample's disc, and the smallest coverage divided by: a sample whose disc is almost all
 // off its surface (a baluster seen side-on under a metre-wide kernel) is brightened 4× at most, which keeps the

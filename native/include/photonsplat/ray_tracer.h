@@ -43,7 +43,7 @@ private:
     // stay below Embree's 1.8e18 (it asserts, aborting Blender, past it). ‖M⁻¹·(o − t)‖ <= scale·‖o‖ + offset
     // over the enabled instances; a ray from farther than that allows starts where it enters the scene's box.
     void measure_reach(const std::vector<Instance>& instances);
-    bool clip_to_scene(Ray& ray, float& t_min, float& t_max, float& shift) const;
+    bool clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const;
 
     struct Impl;
     Impl* impl_;

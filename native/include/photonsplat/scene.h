@@ -32,6 +32,8 @@
 
 namespace ps {
 
+struct Stats;
+
 class RayTracer;
 
 // Input of add_mesh_data / add_mesh: raw arrays as the bindings receive them.
@@ -180,5 +182,9 @@ private:
     void include_in_placed_box(const Instance& instance);
     bool recentre();  // origin_ from placed_min_/max_; re-expresses instances and lights if it moved (true)
 };
+
+// Records the scene's size in stats (counters "triangles", "dropped_triangles", "lights") and the bytes of its
+// ray tracer, building the tracer first if no render has yet (timed as the stage "scene_build").
+void report_scene(const Scene& scene, Stats& stats);
 
 }  // namespace ps

@@ -79,6 +79,22 @@ public:
                                 const RenderControl& control, Stats& stats) const = 0;
 };
 
+// A method that splats the view samples directly, without a hierarchy or the camera (brute, gather): its splat is
+// a function of the samples and the photons, and always a kernel estimate.
+class SampleSplatter : public Splatter {
+public:
+    using Function = std::vector<glm::vec3> (*)(const ViewSamples&, const PhotonMap&, const SplatParams&,
+                                                const RenderControl&, Stats&);
+    explicit SampleSplatter(Function function) : function_(function) {}
+    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
+                        const RenderControl& control, Stats& stats) const override {
+        return {function_(frame.samples, photons, params, control, stats)};
+    }
+
+private:
+    Function function_;
+};
+
 // The registry: every method, in the order UIs list them.
 struct SplatMethodInfo {
     SplatMethod method;

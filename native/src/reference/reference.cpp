@@ -84,8 +84,6 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
     stats.values["max_bounces"] = settings.max_bounces;
     stats.values["width"] = width;
     stats.values["height"] = height;
-    stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
-    stats.counters["lights"] = static_cast<double>(scene.lights().size());
 
     std::vector<glm::dvec3> sum(pixels, glm::dvec3(0.0));
     int passes = 0;
@@ -94,10 +92,7 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
     arena.execute([&] {
         StageTimer total(stats, "total");
         control.begin_stage("scene", 0.0, 0.0);
-        {
-            StageTimer t(stats, "scene_build");
-            stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
-        }
+        report_scene(scene, stats);
         const LightSources sources(scene);
         PathTracerContext context{scene, sources, nullptr, {}, settings.max_bounces};
         bool photon_sources = false;

@@ -61,19 +61,15 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
     return radiance;
 }
 
-
 namespace {
 
-class BruteSplatter final : public Splatter {
+class BruteSplatter final : public SampleSplatter {
 public:
+    BruteSplatter() : SampleSplatter(splat_brute) {}
     SplatMemory predict_memory(const SplatFrame&, size_t photons, const SplatParams&) const override {
         SplatMemory m;
         m.fixed["photon_positions"] = photon_position_bytes(photons);
         return m;
-    }
-    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
-                        const RenderControl& control, Stats& stats) const override {
-        return {splat_brute(frame.samples, photons, params, control, stats)};
     }
 };
 

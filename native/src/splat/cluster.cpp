@@ -66,6 +66,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
+#include "splat_inputs.h"
 #include "photonsplat/validation.h"
 #include "photonsplat/splatter.h"
 
@@ -248,17 +249,12 @@ private:
 };
 
 template <bool kCones>
-class ClusterSplat {
+class ClusterSplat : private SplatInputs {
 public:
     ClusterSplat(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons,
                  const SplatParams& params, const RenderControl& control, Stats& stats)
-        : hierarchy_(hierarchy),
-          views_(samples.samples),
-          photons_(photons.photons),
-          params_(params),
-          control_(control),
-          stats_(stats),
-          positions_(relative_photon_positions(photons, samples.origin)),
+        : SplatInputs(samples, photons, params, control, stats),
+          hierarchy_(hierarchy),
           radiance_(views_.size(), glm::vec3(0.0f)) {
         const float r = params.radius;
         reject_distance_sq_ = (r * r) * (1.0f + 1e-5f);
@@ -334,10 +330,8 @@ public:
             stats_.bytes["accepted_flux"] = double(accepted_.bytes());
             stats_.bytes["cone_traversal_nodes"] = double(cone_nodes_.capacity() * sizeof(ConeNode));
         }
-        stats_.counters["leaf_photon_pairs"] += double(total_pairs_);
-        stats_.counters["splat_batches"] += double(batches_);
-        stats_.bytes["leaf_photon_lists"] = double(meter_.peak());
-        stats_.bytes["splat_sample_sums"] = double(sums_.capacity() * sizeof(glm::dvec3));
+        report_batches("leaf", total_pairs_, batches_, double(meter_.peak()),
+                       double(sums_.capacity() * sizeof(glm::dvec3)));
         return std::move(radiance_);
     }
 
@@ -664,12 +658,6 @@ private:
     }
 
     const ClusterHierarchy& hierarchy_;
-    const std::vector<ViewSample>& views_;
-    const std::vector<Photon>& photons_;
-    const SplatParams& params_;
-    const RenderControl& control_;
-    Stats& stats_;
-    const std::vector<glm::vec3> positions_;
     float reject_distance_sq_ = 0.0f;
     float accept_distance_sq_ = -1.0f;  // cluster_cone: accept a node only when its farthest point is nearer
     PairBudget budget_;
@@ -729,24 +717,29 @@ bool prepare(const char* method, const ClusterHierarchy& hierarchy, const ViewSa
     return true;
 }
 
+// Both entry points: the checks, then the splat with or without cones.
+template <bool kCones>
+std::vector<glm::vec3> cluster_splat(const char* method, const ClusterHierarchy& hierarchy, const ViewSamples& samples,
+                                     const PhotonMap& photons, const SplatParams& params,
+                                     const RenderControl& control, Stats& stats) {
+    if (!prepare(method, hierarchy, samples, photons, params, control, stats, kCones))
+        return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
+    return ClusterSplat<kCones>(hierarchy, samples, photons, params, control, stats).run();
+}
+
 }  // namespace
 
 std::vector<glm::vec3> splat_cluster(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
                                      const PhotonMap& photons, const SplatParams& params,
                                      const RenderControl& control, Stats& stats) {
-    if (!prepare("cluster", hierarchy, samples, photons, params, control, stats, false))
-        return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
-    return ClusterSplat<false>(hierarchy, samples, photons, params, control, stats).run();
+    return cluster_splat<false>("cluster", hierarchy, samples, photons, params, control, stats);
 }
 
 std::vector<glm::vec3> splat_cluster_cone(const ClusterHierarchy& hierarchy, const ViewSamples& samples,
                                           const PhotonMap& photons, const SplatParams& params,
                                           const RenderControl& control, Stats& stats) {
-    if (!prepare("cluster_cone", hierarchy, samples, photons, params, control, stats, true))
-        return std::vector<glm::vec3>(samples.samples.size(), glm::vec3(0.0f));  // (emitted may be 0)
-    return ClusterSplat<true>(hierarchy, samples, photons, params, control, stats).run();
+    return cluster_splat<true>("cluster_cone", hierarchy, samples, photons, params, control, stats);
 }
-
 
 namespace {
 

@@ -88,10 +88,12 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/render_control.h"
+#include "photonsplat/scattering.h"
 #include "photonsplat/settings.h"
 #include "photonsplat/splatter.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
+#include "splat_inputs.h"
 #include "photonsplat/validation.h"
 
 namespace ps {
@@ -245,15 +247,6 @@ struct Cut {
     uint32_t parent = kNone;   // the parent node to blend with, or kNone
 };
 
-// An orthonormal frame around a unit vector (the branch-free construction of Duff et al. 2017).
-void frame_around(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float c = n.x * n.y * a;
-    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
-    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
-}
-
 bool regular(const ViewSample& s) { return is_finite(s.position) && is_finite(s.normal); }
 
 // Which of a cut node's facets a sample belongs to: the one whose axis is closest to its normal.
@@ -292,7 +285,7 @@ void describe_facet(Facet& f, const std::vector<Oriented>& points, const SplatPa
     const glm::dvec3 centroid = position_sum / double(f.samples);
     const glm::dvec3 axis(f.axis);
     f.centroid = glm::vec3(centroid);
-    frame_around(f.axis, f.tangent, f.bitangent);
+    orthonormal_basis(f.axis, f.tangent, f.bitangent);
     double min_cos = 1.0, slab = 0.0, reach = 0.0;
     for (const Oriented& s : points) {
         if (!member(s)) continue;
@@ -395,7 +388,7 @@ bool facet_from_parts(const ClusterHierarchy& hierarchy, size_t first, size_t la
     out.centroid = glm::vec3(centroid);
     out.samples = uint32_t(count);
     out.reach = float(reach);
-    frame_around(out.axis, out.tangent, out.bitangent);
+    orthonormal_basis(out.axis, out.tangent, out.bitangent);
     set_rejects(out, float(std::min(spread, double(kPi))) + kConeInflation, slab, params);
     return true;
 }
@@ -514,20 +507,15 @@ bool faces_all(const Facet& f, const ShadeBin* bins, int count, glm::dvec3& sum)
 
 // ---- the splat ----------------------------------------------------------------------------------------------
 
-class DirectionalSplat {
+class DirectionalSplat : private SplatInputs {
 public:
     DirectionalSplat(const ClusterHierarchy& hierarchy, const ViewSamples& samples, const PhotonMap& photons,
                      const SplatParams& params, const RenderControl& control, Stats& stats, TreeShape shape,
                      int level)
-        : hierarchy_(hierarchy),
-          views_(samples.samples),
-          photons_(photons.photons),
-          params_(params),
-          control_(control),
-          stats_(stats),
+        : SplatInputs(samples, photons, params, control, stats),
+          hierarchy_(hierarchy),
           shape_(std::move(shape)),
           level_(level),
-          positions_(relative_photon_positions(photons, samples.origin)),
           radiance_(views_.size(), glm::vec3(0.0f)) {}
 
     std::vector<glm::vec3> run() {
@@ -932,14 +920,8 @@ private:
     uint64_t total_progress() const { return positions_.size() + cuts_.size() + views_.size(); }
 
     const ClusterHierarchy& hierarchy_;
-    const std::vector<ViewSample>& views_;
-    const std::vector<Photon>& photons_;
-    const SplatParams& params_;
-    const RenderControl& control_;
-    Stats& stats_;
     const TreeShape shape_;
     const int level_;
-    const std::vector<glm::vec3> positions_;
     std::vector<glm::vec3> radiance_;
 
     std::vector<Cut> cuts_;                   // in sample order

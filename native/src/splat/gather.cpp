@@ -421,8 +421,9 @@ std::vector<glm::vec3> splat_gather(const ViewSamples& samples, const PhotonMap&
 
 namespace {
 
-class GatherSplatter final : public Splatter {
+class GatherSplatter final : public SampleSplatter {
 public:
+    GatherSplatter() : SampleSplatter(splat_gather) {}
     SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams&) const override {
         const double p = double(photons);
         SplatMemory m;
@@ -433,10 +434,6 @@ public:
         // Each thread's candidate list and near list hold at most every photon once.
         m.fixed["gather_lists"] = double(std::max(frame.threads, 1)) * std::min(p, 65536.0) * 16.0;
         return m;
-    }
-    SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
-                        const RenderControl& control, Stats& stats) const override {
-        return {splat_gather(frame.samples, photons, params, control, stats)};
     }
 };
 

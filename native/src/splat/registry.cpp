@@ -3,6 +3,7 @@
 #include <string>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/named_rows.h"
 #include "photonsplat/settings.h"
 #include "photonsplat/splatter.h"
 
@@ -45,12 +46,7 @@ const char* to_string(SplatMethod method) {
 }
 
 SplatMethod splat_method_from_string(const std::string& name) {
-    std::string known;
-    for (const SplatMethodInfo& m : splat_methods()) {
-        if (name == m.name) return m.method;
-        known += known.empty() ? m.name : std::string(", ") + m.name;
-    }
-    throw InvalidInput("splat method", "'" + name + "' is not one of: " + known);
+    return row_named(splat_methods(), name, "splat method").method;
 }
 
 std::vector<std::string> splat_method_names() {

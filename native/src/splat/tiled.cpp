@@ -61,6 +61,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/stats.h"
+#include "splat_inputs.h"
 #include "photonsplat/validation.h"
 #include "photonsplat/splatter.h"
 
@@ -215,15 +216,11 @@ int64_t bytes_of(const std::vector<T>& v) {
     return int64_t(v.capacity() * sizeof(T));
 }
 
-class TiledSplat {
+class TiledSplat : private SplatInputs {
 public:
     TiledSplat(const ViewSamples& samples, const Camera& camera, const PhotonMap& photons, const SplatParams& params,
                const RenderControl& control, Stats& stats)
-        : views_(samples.samples),
-          photons_(photons.photons),
-          params_(params),
-          control_(control),
-          stats_(stats),
+        : SplatInputs(samples, photons, params, control, stats),
           frame_(view_frame(camera)),
           width_(camera.width()),
           height_(camera.height()),
@@ -231,7 +228,6 @@ public:
           tiles_y_((height_ + kTileSize - 1) / kTileSize),
           eye_(camera.position() - samples.origin),
           forward_(frame_.forward),
-          positions_(relative_photon_positions(photons, samples.origin)),
           radiance_(views_.size(), glm::vec3(0.0f)) {
         const float r = params.radius;
         reject_box_sq_ = (r * r) * (1.0f + 1e-5f);
@@ -288,10 +284,8 @@ public:
         stats_.counters["photon_tile_tests"] += double(tile_tests_.load());
         stats_.counters["photon_sample_tests"] += double(sample_tests_.load());
         stats_.counters["contributing_pairs"] += double(contributing_.load());
-        stats_.counters["tile_photon_pairs"] += double(total_pairs_);
-        stats_.counters["splat_batches"] += double(batches_);
-        stats_.bytes["tile_photon_lists"] = double(meter_.peak());
-        stats_.bytes["splat_sample_sums"] = double(sums_.capacity() * sizeof(glm::dvec3));
+        report_batches("tile", total_pairs_, batches_, double(meter_.peak()),
+                       double(sums_.capacity() * sizeof(glm::dvec3)));
         return std::move(radiance_);
     }
 
@@ -721,16 +715,10 @@ private:
         });
     }
 
-    const std::vector<ViewSample>& views_;
-    const std::vector<Photon>& photons_;
-    const SplatParams& params_;
-    const RenderControl& control_;
-    Stats& stats_;
     const ViewFrame frame_;
     const int width_, height_, tiles_x_, tiles_y_;
     const glm::vec3 eye_;      // camera position relative to the samples' origin
     const glm::vec3 forward_;  // view depth axis
-    const std::vector<glm::vec3> positions_;
     float reject_box_sq_ = 0.0f, prefilter_sq_ = 0.0f;
     double max_plane_offset_ = 0.0;
 
