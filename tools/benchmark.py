@@ -171,7 +171,7 @@ def summary_tables(records, methods):
 
 
 def ratio_lines(records):
-    """The issue's acceptance figures, as ratios measured in this run."""
+    """The headline ratios (`cluster_cone` against `tiled`, `directional` against `cluster_cone`), from this run."""
     lines = []
     for photons in sorted({r["photons"] for r in records}):
         by = {}
