@@ -97,6 +97,21 @@ glm::dvec3 dvec3(const py::object& obj, const std::string& field) { return vecto
 glm::dmat4 dmat4(const py::object& obj, const std::string& field) { return matrix4<glm::dmat4>(obj, field); }
 glm::mat4 mat4(const py::object& obj, const std::string& field) { return matrix4<glm::mat4>(obj, field); }
 
+LightReader::LightReader(ps::LightKind kind, const std::string& name) {
+    light.name = name;
+    light.kind = kind;
+}
+
+std::string LightReader::field(const std::string& name) const {
+    return std::string(ps::to_string(light.kind)) + " light '" + light.name + "'." + name;
+}
+
+glm::vec3 LightReader::vector(const py::object& obj, const std::string& name) const { return vec3(obj, field(name)); }
+
+glm::dvec3 LightReader::position(const py::object& obj, const std::string& name) const {
+    return dvec3(obj, field(name));
+}
+
 int positive_int(const py::object& obj, const std::string& field) {
     if (!py::isinstance<py::int_>(obj)) throw ps::InvalidInput(field, "must be an integer");
     const long long v = obj.cast<long long>();

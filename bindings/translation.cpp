@@ -156,16 +156,14 @@ void bind_translation(py::module_& m) {
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,
                const py::object& intensity, float spot_size, float spot_blend, float radius) {
-                ps::Light l;
-                l.name = name;
-                l.kind = ps::LightKind::spot;
-                const glm::dvec3 p = dvec3(position, "spot light '" + name + "'.position");
-                l.direction = vec3(direction, "spot light '" + name + "'.direction");
-                l.value = vec3(intensity, "spot light '" + name + "'.intensity");
-                l.spot_size = spot_size;
-                l.spot_blend = spot_blend;
-                l.radius = radius;
-                s.add_light(l, p);
+                LightReader l(ps::LightKind::spot, name);
+                const glm::dvec3 p = l.position(position, "position");
+                l.light.direction = l.vector(direction, "direction");
+                l.light.value = l.vector(intensity, "intensity");
+                l.light.spot_size = spot_size;
+                l.light.spot_blend = spot_blend;
+                l.light.radius = radius;
+                s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
             "radius"_a = 0.0f,
