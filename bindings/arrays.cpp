@@ -21,13 +21,46 @@ std::string shape_of(const py::array& a) {
 
 std::string dtype_of(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
 
-py::array_t<float, py::array::c_style> float_array(const py::object& obj, const std::string& field) {
+namespace {
+
+// Any real floating or integer array converted to T: float32 for float_array, float64 where positions need it
+// (float64 input is then not rounded).
+template <typename T>
+py::array_t<T, py::array::c_style> real_array(const py::object& obj, const std::string& field) {
     py::array a = py::array::ensure(obj);
     if (!a) throw ps::InvalidInput(field, "must be a numpy array (or convertible to one)");
     const char kind = a.dtype().kind();
     if (kind != 'f' && kind != 'i' && kind != 'u')
         throw ps::InvalidInput(field, "must hold real numbers, got dtype " + dtype_of(a));
-    return py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+    return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+// A glm vector of 3 finite components, read in its own precision.
+template <typename Vec>
+Vec vector3(const py::object& obj, const std::string& field) {
+    const auto a = real_array<typename Vec::value_type>(obj, field);
+    if (a.size() != 3) throw ps::InvalidInput(field, "must have 3 components, got shape " + shape_of(a));
+    const Vec v(a.data()[0], a.data()[1], a.data()[2]);
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        throw ps::InvalidInput(field, "must be finite");
+    return v;
+}
+
+// Row-major numpy (math convention: world = M @ [x, y, z, 1]) into a column-major glm matrix of its precision.
+template <typename Mat>
+Mat matrix4(const py::object& obj, const std::string& field) {
+    const auto a = real_array<typename Mat::value_type>(obj, field);
+    require_shape(a, {4, 4}, field, "(4, 4)");
+    Mat m;
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c);
+    return m;
+}
+
+}  // namespace
+
+py::array_t<float, py::array::c_style> float_array(const py::object& obj, const std::string& field) {
+    return real_array<float>(obj, field);
 }
 
 py::array_t<int32_t, py::array::c_style> index_array(const py::object& obj, const std::string& field) {
@@ -59,51 +92,24 @@ void require_shape(const py::array& a, std::initializer_list<py::ssize_t> shape,
     if (!ok) throw ps::InvalidInput(field, "must have shape " + expected + ", got " + shape_of(a));
 }
 
-glm::vec3 vec3(const py::object& obj, const std::string& field) {
-    py::array_t<float, py::array::c_style> a = float_array(obj, field);
-    if (a.size() != 3) throw ps::InvalidInput(field, "must have 3 components, got shape " + shape_of(a));
-    glm::vec3 v(a.data()[0], a.data()[1], a.data()[2]);
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-        throw ps::InvalidInput(field, "must be finite");
-    return v;
+glm::vec3 vec3(const py::object& obj, const std::string& field) { return vector3<glm::vec3>(obj, field); }
+glm::dvec3 dvec3(const py::object& obj, const std::string& field) { return vector3<glm::dvec3>(obj, field); }
+glm::dmat4 dmat4(const py::object& obj, const std::string& field) { return matrix4<glm::dmat4>(obj, field); }
+glm::mat4 mat4(const py::object& obj, const std::string& field) { return matrix4<glm::mat4>(obj, field); }
+
+LightReader::LightReader(ps::LightKind kind, const std::string& name) {
+    light.name = name;
+    light.kind = kind;
 }
 
-// Like float_array, but to float64 (no rounding of float64 input).
-py::array_t<double, py::array::c_style> double_array(const py::object& obj, const std::string& field) {
-    py::array a = py::array::ensure(obj);
-    if (!a) throw ps::InvalidInput(field, "must be a numpy array (or convertible to one)");
-    const char kind = a.dtype().kind();
-    if (kind != 'f' && kind != 'i' && kind != 'u')
-        throw ps::InvalidInput(field, "must hold real numbers, got dtype " + dtype_of(a));
-    return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+std::string LightReader::field(const std::string& name) const {
+    return std::string(ps::to_string(light.kind)) + " light '" + light.name + "'." + name;
 }
 
-glm::dvec3 dvec3(const py::object& obj, const std::string& field) {
-    py::array_t<double, py::array::c_style> a = double_array(obj, field);
-    if (a.size() != 3) throw ps::InvalidInput(field, "must have 3 components, got shape " + shape_of(a));
-    glm::dvec3 v(a.data()[0], a.data()[1], a.data()[2]);
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-        throw ps::InvalidInput(field, "must be finite");
-    return v;
-}
+glm::vec3 LightReader::vector(const py::object& obj, const std::string& name) const { return vec3(obj, field(name)); }
 
-// Row-major numpy (math convention: world = M @ [x, y, z, 1]) into column-major glm.
-glm::dmat4 dmat4(const py::object& obj, const std::string& field) {
-    py::array_t<double, py::array::c_style> a = double_array(obj, field);
-    require_shape(a, {4, 4}, field, "(4, 4)");
-    glm::dmat4 m;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c);
-    return m;
-}
-
-glm::mat4 mat4(const py::object& obj, const std::string& field) {
-    py::array_t<float, py::array::c_style> a = float_array(obj, field);
-    require_shape(a, {4, 4}, field, "(4, 4)");
-    glm::mat4 m;
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) m[c][r] = a.at(r, c);
-    return m;
+glm::dvec3 LightReader::position(const py::object& obj, const std::string& name) const {
+    return dvec3(obj, field(name));
 }
 
 int positive_int(const py::object& obj, const std::string& field) {

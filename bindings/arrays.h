@@ -13,6 +13,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "photonsplat/lights.h"
 #include "photonsplat/render.h"
 #include "photonsplat/stats.h"
 
@@ -40,6 +41,17 @@ glm::dvec3 dvec3(const py::object& obj, const std::string& field);       // 3 fi
 glm::dmat4 dmat4(const py::object& obj, const std::string& field);       // (4, 4) row-major numpy
 glm::mat4 mat4(const py::object& obj, const std::string& field);         // (4, 4) row-major numpy, float
 int positive_int(const py::object& obj, const std::string& field);       // Python int in [1, 65536]
+
+// A light of one kind being filled from Python arguments: reads its fields with messages that name the light
+// ("spot light 'Key'.direction must ...").
+struct LightReader {
+    ps::Light light;
+
+    LightReader(ps::LightKind kind, const std::string& name);
+    std::string field(const std::string& name) const;                       // "<kind> light '<light>'.<name>"
+    glm::vec3 vector(const py::object& obj, const std::string& name) const;     // vec3 named field(name)
+    glm::dvec3 position(const py::object& obj, const std::string& name) const;  // dvec3 named field(name)
+};
 
 // (height, width, channels) float32 copy of a row-major buffer.
 py::array_t<float> image_array(const std::vector<float>& data, int height, int width, int channels);

@@ -88,26 +88,22 @@ PYBIND11_MODULE(_core, m) {
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,
                float radius) {
-                ps::Light l;
-                l.name = name;
-                l.kind = ps::LightKind::point;
-                const glm::dvec3 p = dvec3(position, "point light '" + name + "'.position");
-                l.value = vec3(intensity, "point light '" + name + "'.intensity");
-                l.radius = radius;
-                s.add_light(l, p);
+                LightReader l(ps::LightKind::point, name);
+                const glm::dvec3 p = l.position(position, "position");
+                l.light.value = l.vector(intensity, "intensity");
+                l.light.radius = radius;
+                s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "intensity"_a, "radius"_a = 0.0f, "Isotropic point light; intensity in W/sr.")
         .def(
             "add_sun_light",
             [](ps::Scene& s, const std::string& name, const py::object& direction, const py::object& irradiance,
                float angle) {
-                ps::Light l;
-                l.name = name;
-                l.kind = ps::LightKind::sun;
-                l.direction = vec3(direction, "sun light '" + name + "'.direction");
-                l.value = vec3(irradiance, "sun light '" + name + "'.irradiance");
-                l.angle = angle;
-                s.add_light(l);
+                LightReader l(ps::LightKind::sun, name);
+                l.light.direction = l.vector(direction, "direction");
+                l.light.value = l.vector(irradiance, "irradiance");
+                l.light.angle = angle;
+                s.add_light(l.light);
             },
             "name"_a, "direction"_a, "irradiance"_a, "angle"_a = 0.0f,
             "Distant light travelling along direction; irradiance in W/m²; angle = full angular diameter.")
@@ -115,18 +111,15 @@ PYBIND11_MODULE(_core, m) {
             "add_area_light",
             [](ps::Scene& s, const std::string& name, const py::object& center, const py::object& axis_u,
                const py::object& axis_v, const py::object& radiance, const std::string& shape) {
-                ps::Light l;
-                l.name = name;
-                l.kind = ps::LightKind::area;
-                const glm::dvec3 c = dvec3(center, "area light '" + name + "'.center");
-                l.axis_u = vec3(axis_u, "area light '" + name + "'.axis_u");
-                l.axis_v = vec3(axis_v, "area light '" + name + "'.axis_v");
-                l.value = vec3(radiance, "area light '" + name + "'.radiance");
+                LightReader l(ps::LightKind::area, name);
+                const glm::dvec3 c = l.position(center, "center");
+                l.light.axis_u = l.vector(axis_u, "axis_u");
+                l.light.axis_v = l.vector(axis_v, "axis_v");
+                l.light.value = l.vector(radiance, "radiance");
                 if (shape != "rectangle" && shape != "ellipse")
-                    throw ps::InvalidInput("area light '" + name + "'.shape",
-                                           "must be 'rectangle' or 'ellipse', got '" + shape + "'");
-                l.ellipse = shape == "ellipse";
-                s.add_light(l, c);
+                    throw ps::InvalidInput(l.field("shape"), "must be 'rectangle' or 'ellipse', got '" + shape + "'");
+                l.light.ellipse = shape == "ellipse";
+                s.add_light(l.light, c);
             },
             "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a, "shape"_a = "rectangle",
             "One-sided rectangle with full edge vectors u, v (or, shape='ellipse', the ellipse inscribed in it), "

@@ -25,6 +25,23 @@ struct MeshArrays {
     py::array_t<int32_t, py::array::c_style> triangles, material_ids;
 };
 
+// An optional attribute of `columns` floats per vertex, (N, columns), or per triangle corner, (M, 3, columns):
+// nullptr for None, else its data, kept alive by `held`; `per_corner` is set to which of the two it is.
+const float* per_vertex_or_corner(const py::object& obj, const std::string& field, py::ssize_t n, py::ssize_t m,
+                                  py::ssize_t columns, py::array_t<float, py::array::c_style>& held,
+                                  bool& per_corner) {
+    if (obj.is_none()) return nullptr;
+    held = float_array(obj, field);
+    per_corner = held.ndim() == 3;
+    const std::string c = std::to_string(columns);
+    const std::string corner = "(M, 3, " + c + ") per corner", vertex = "(N, " + c + ") per vertex";
+    if (per_corner)
+        require_shape(held, {m, 3, columns}, field, corner + " or " + vertex);
+    else
+        require_shape(held, {n, columns}, field, vertex + " or " + corner);
+    return held.data();
+}
+
 ps::MeshInput mesh_input(const std::string& name, const py::object& vertices_obj, const py::object& triangles_obj,
                          const py::object& normals_obj, const py::object& uvs_obj, const py::object& material_ids_obj,
                          MeshArrays& arrays) {
@@ -40,24 +57,9 @@ ps::MeshInput mesh_input(const std::string& name, const py::object& vertices_obj
     mesh.triangles = arrays.triangles.data();
     mesh.triangle_count = static_cast<size_t>(arrays.triangles.shape(0));
     const auto m = static_cast<py::ssize_t>(mesh.triangle_count), n = static_cast<py::ssize_t>(mesh.vertex_count);
-    if (!normals_obj.is_none()) {
-        arrays.normals = float_array(normals_obj, where + ".normals");
-        mesh.normals_per_corner = arrays.normals.ndim() == 3;
-        if (mesh.normals_per_corner)
-            require_shape(arrays.normals, {m, 3, 3}, where + ".normals", "(M, 3, 3) per corner or (N, 3) per vertex");
-        else
-            require_shape(arrays.normals, {n, 3}, where + ".normals", "(N, 3) per vertex or (M, 3, 3) per corner");
-        mesh.normals = arrays.normals.data();
-    }
-    if (!uvs_obj.is_none()) {
-        arrays.uvs = float_array(uvs_obj, where + ".uvs");
-        mesh.uvs_per_corner = arrays.uvs.ndim() == 3;
-        if (mesh.uvs_per_corner)
-            require_shape(arrays.uvs, {m, 3, 2}, where + ".uvs", "(M, 3, 2) per corner or (N, 2) per vertex");
-        else
-            require_shape(arrays.uvs, {n, 2}, where + ".uvs", "(N, 2) per vertex or (M, 3, 2) per corner");
-        mesh.uvs = arrays.uvs.data();
-    }
+    mesh.normals = per_vertex_or_corner(normals_obj, where + ".normals", n, m, 3, arrays.normals,
+                                        mesh.normals_per_corner);
+    mesh.uvs = per_vertex_or_corner(uvs_obj, where + ".uvs", n, m, 2, arrays.uvs, mesh.uvs_per_corner);
     if (!material_ids_obj.is_none()) {
         arrays.material_ids = index_array(material_ids_obj, where + ".material_ids");
         require_shape(arrays.material_ids, {m}, where + ".material_ids", "(M,)");
@@ -154,16 +156,14 @@ void bind_translation(py::module_& m) {
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,
                const py::object& intensity, float spot_size, float spot_blend, float radius) {
-                ps::Light l;
-                l.name = name;
-                l.kind = ps::LightKind::spot;
-                const glm::dvec3 p = dvec3(position, "spot light '" + name + "'.position");
-                l.direction = vec3(direction, "spot light '" + name + "'.direction");
-                l.value = vec3(intensity, "spot light '" + name + "'.intensity");
-                l.spot_size = spot_size;
-                l.spot_blend = spot_blend;
-                l.radius = radius;
-                s.add_light(l, p);
+                LightReader l(ps::LightKind::spot, name);
+                const glm::dvec3 p = l.position(position, "position");
+                l.light.direction = l.vector(direction, "direction");
+                l.light.value = l.vector(intensity, "intensity");
+                l.light.spot_size = spot_size;
+                l.light.spot_blend = spot_blend;
+                l.light.radius = radius;
+                s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
             "radius"_a = 0.0f,

@@ -18,6 +18,7 @@ import bpy
 import sys
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
 from scene_kit import diffuse_material, glass_material, save, new_empty_scene as _new_scene  # noqa: E402
+from scene_kit import add_camera as add_scene_camera  # noqa: E402
 
 
 # Classic Cornell-box albedos (scene-linear).
@@ -109,16 +110,8 @@ def add_light(scene, location):
 
 
 def add_camera(scene):
-    camera = bpy.data.cameras.new("Camera")
-    camera.lens = 50.0
-    camera.sensor_width = 36.0
-    camera.sensor_fit = 'AUTO'
-    obj = bpy.data.objects.new("Camera", camera)
-    obj.location = (0.0, -3.9, 1.0)
-    obj.rotation_euler = (math.radians(90.0), 0.0, 0.0)   # local -Z (view axis) -> world +Y
-    scene.collection.objects.link(obj)
-    scene.camera = obj
-    return obj
+    # Local -Z (the view axis) turned to world +Y: the camera looks into the box through its open front.
+    return add_scene_camera(scene, 50.0, (0.0, -3.9, 1.0), (math.radians(90.0), 0.0, 0.0))
 
 
 def make_caustics():

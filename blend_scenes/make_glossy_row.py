@@ -21,6 +21,7 @@ import bpy
 import sys
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
 from scene_kit import diffuse_material, glossy_material, save, new_empty_scene as _new_scene  # noqa: E402
+from scene_kit import add_camera as add_scene_camera  # noqa: E402
 from mathutils import Vector
 
 
@@ -98,16 +99,8 @@ def add_lights(scene):
 
 
 def add_camera(scene):
-    camera = bpy.data.cameras.new("Camera")
-    camera.lens = CAMERA_LENS
-    camera.sensor_width = 36.0
-    camera.sensor_fit = 'AUTO'
-    obj = bpy.data.objects.new("Camera", camera)
-    obj.location = CAMERA_LOCATION
-    obj.rotation_euler = (Vector(CAMERA_TARGET) - Vector(CAMERA_LOCATION)).to_track_quat('-Z', 'Y').to_euler()
-    scene.collection.objects.link(obj)
-    scene.camera = obj
-    return obj
+    aim = Vector(CAMERA_TARGET) - Vector(CAMERA_LOCATION)
+    return add_scene_camera(scene, CAMERA_LENS, CAMERA_LOCATION, aim.to_track_quat('-Z', 'Y').to_euler())
 
 
 def make_glossy_row():

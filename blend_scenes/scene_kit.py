@@ -1,4 +1,4 @@
-"""What the scene generators share: an empty Cycles scene, the few materials they build, and saving.
+"""What the scene generators share: an empty Cycles scene, the few materials they build, a camera, and saving.
 
 Imported by make_*.py (run as `blender -b --factory-startup --python blend_scenes/make_<scene>.py`), which put
 this folder on sys.path first.
@@ -73,6 +73,20 @@ def glossy_material(name, color, roughness):
     material.metallic = 1.0                            # viewport look
     material.roughness = roughness
     return material
+
+
+def add_camera(scene, lens, location, rotation_euler):
+    """The scene's camera, "Camera": `lens` mm on a 36 mm sensor (fit AUTO), at `location`, turned by `rotation_euler`."""
+    camera = bpy.data.cameras.new("Camera")
+    camera.lens = lens
+    camera.sensor_width = 36.0
+    camera.sensor_fit = 'AUTO'
+    obj = bpy.data.objects.new("Camera", camera)
+    obj.location = location
+    obj.rotation_euler = rotation_euler
+    scene.collection.objects.link(obj)
+    scene.camera = obj
+    return obj
 
 
 def save(name):

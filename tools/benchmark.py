@@ -62,7 +62,7 @@ def parse_frames(text):
 
 
 def display_luminance(image):
-    """Luminance of the display image (linear -> clamp [0, 1] -> sRGB), as the design measures SSIM on."""
+    """Luminance of the display image (linear -> clamp [0, 1] -> sRGB): what SSIM is measured on."""
     rgb = np.clip(image[..., :3], 0.0, 1.0)
     srgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1.0 / 2.4) - 0.055)
     return srgb @ np.array([0.2126, 0.7152, 0.0722])
@@ -171,7 +171,7 @@ def summary_tables(records, methods):
 
 
 def ratio_lines(records):
-    """The issue's acceptance figures, as ratios measured in this run."""
+    """The headline ratios (`cluster_cone` against `tiled`, `directional` against `cluster_cone`), from this run."""
     lines = []
     for photons in sorted({r["photons"] for r in records}):
         by = {}
@@ -200,48 +200,44 @@ def ratio_lines(records):
     return "\n".join(lines)
 
 
+def method_table(title, first_column, keys, methods, cell):
+    """A markdown table with a row per key and a column per method; cell(key, method) is a cell's text."""
+    lines = [f"\n{title}:\n", f"| {first_column} | " + " | ".join(f"`{m}`" for m in methods) + " |",
+             "|---" * (len(methods) + 1) + "|"]
+    lines += [f"| {k} | " + " | ".join(cell(k, m) for m in methods) + " |" for k in keys]
+    return "\n".join(lines)
+
+
 def frame_table(records, methods, photons):
     rows = [r for r in records if r["photons"] == photons]
     frames = sorted({r["frame"] for r in rows})
     if len(frames) < 2:
         return ""
-    lines = [f"\nSplat time per frame (s), {photons:,} photons:\n",
-             "| frame | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
-    for f in frames:
-        cells = []
-        for m in methods:
-            r = [x for x in rows if x["frame"] == f and x["method"] == m]
-            cells.append(f"{r[0]['seconds']['splat']:.3f}" if r else "–")
-        lines.append(f"| {f} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+
+    def cell(f, m):
+        r = [x for x in rows if x["frame"] == f and x["method"] == m]
+        return f"{r[0]['seconds']['splat']:.3f}" if r else "–"
+    return method_table(f"Splat time per frame (s), {photons:,} photons", "frame", frames, methods, cell)
 
 
 def memory_table(records, methods, photons):
     rows = [r for r in records if r["photons"] == photons]
-    keys = sorted({k for r in rows for k in r["bytes"]})
-    lines = [f"\nMemory per structure (MiB, largest over the frames), {photons:,} photons:\n",
-             "| structure | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
-    for k in keys:
-        cells = []
-        for m in methods:
-            values = [r["bytes"][k] for r in rows if r["method"] == m and k in r["bytes"]]
-            cells.append(f"{max(values) / 2**20:.1f}" if values else "–")
-        lines.append(f"| {k} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+
+    def cell(k, m):
+        values = [r["bytes"][k] for r in rows if r["method"] == m and k in r["bytes"]]
+        return f"{max(values) / 2**20:.1f}" if values else "–"
+    return method_table(f"Memory per structure (MiB, largest over the frames), {photons:,} photons", "structure",
+                        sorted({k for r in rows for k in r["bytes"]}), methods, cell)
 
 
 def stage_table(records, methods, photons):
     rows = [r for r in records if r["photons"] == photons]
-    keys = sorted({k for r in rows for k in r["seconds"]})
-    lines = [f"\nStage times (s, mean over the frames), {photons:,} photons:\n",
-             "| stage | " + " | ".join(f"`{m}`" for m in methods) + " |", "|---" * (len(methods) + 1) + "|"]
-    for k in keys:
-        cells = []
-        for m in methods:
-            values = [r["seconds"].get(k, 0.0) for r in rows if r["method"] == m]
-            cells.append(f"{mean(values):.3f}" if values else "–")
-        lines.append(f"| {k} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+
+    def cell(k, m):
+        values = [r["seconds"].get(k, 0.0) for r in rows if r["method"] == m]
+        return f"{mean(values):.3f}" if values else "–"
+    return method_table(f"Stage times (s, mean over the frames), {photons:,} photons", "stage",
+                        sorted({k for r in rows for k in r["seconds"]}), methods, cell)
 
 
 def markdown(records, args):

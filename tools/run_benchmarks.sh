@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Regenerates the tables behind docs/benchmarks.md (issue 3: the paper's method set, measured like the paper):
+# Regenerates the tables behind docs/benchmarks.md (the paper's method set, measured like the paper):
 # the atrium fly-through and the Cornell box at 1920x1080, photon counts 10k / 50k / 200k / 1M, every method,
-# written as markdown and JSON into docs/results/. About 15 minutes on the project's 2-core machine.
+# written as markdown and JSON into docs/results/. docs/benchmarks.md says how long it takes.
 # Run after scripts/build.sh (or either README command).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -1,13 +1,12 @@
 #!/usr/bin/env bash
-# Regenerates docs/results/report.md, report.csv and the report_*.png plots and crops (issue 4: speed against
-# error): every scene of blend_scenes/ at 128 pixels wide (height from the scene's aspect), one Blender run per
+# Regenerates docs/results/report.md, report.csv and the report_*.png plots and crops (speed against error):
+# every scene of blend_scenes/ at 128 pixels wide (height from the scene's aspect), one Blender run per
 # scene measuring the paper's tables, progressive splatting over time and, on the caustic scenes, Cycles; then
 # plain Python writes the tables and plots. Then the caustic scenes once more at 256 pixels wide, into
 # docs/results/caustic_256/. References (4096 samples per pixel, however long that takes) are cached under
 # build/report*/reference/ keyed by each .blend's content, so a rerun skips them; they can be made ahead, under
-# any load, with `measure --reference-only`. Measured on the project's 2-core machine: about 50 minutes for the
-# references the first time (under load), then 21 minutes for the measurements; run the measurements on a quiet
-# machine (every report states its load average). Run after scripts/build.sh. Extra arguments go to every
+# any load, with `measure --reference-only` (README.md says how long each part takes). Run the measurements on a
+# quiet machine (every report states its load average). Run after scripts/build.sh. Extra arguments go to every
 # measure run (e.g. --seconds 3 --no-cycles; see tools/report.py --help).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
