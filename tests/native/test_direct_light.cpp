@@ -141,8 +141,9 @@ double sky_through_opening_variance(int samples) {
 
 TEST(DirectLight, ShadowRaysOfALightAreStratified) {
     // n independent rays would have 1/n of one ray's variance; stratified over the light's sampling square they
-    // cover the opening evenly and do better where visibility changes smoothly with direction (measured: 0.83 of
-    // that with 4 rays, 0.60 with 16; the strata of 4 are coarse rings and half-discs of the hemisphere).
+    // cover the opening evenly and do better where visibility changes smoothly with direction: about 0.83 of
+    // that with 4 rays and 0.60 with 16 (the strata of 4 are coarse rings and half-discs of the hemisphere),
+    // under the bounds below with room for the seeds' noise.
     const double one = sky_through_opening_variance(1);
     const double four = sky_through_opening_variance(4);
     const double sixteen = sky_through_opening_variance(16);

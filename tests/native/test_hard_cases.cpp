@@ -1,4 +1,4 @@
-// The hard cases of design §6, each rendered with EVERY splat method: the output is finite, the exact methods
+// The hard cases, each rendered with EVERY splat method: the output is finite, the exact methods
 // equal `brute` (relative 1e-4 per component, plus 1e-6 of the image's largest value for summation order), the
 // approximate `directional` is within 10 % of brute's total indirect light, and where an analytic value exists
 // the image is compared with it. Inputs the core refuses must raise InvalidInput naming the cause.
@@ -724,7 +724,7 @@ TEST(HardCases, HundredThousandCoincidentPhotonsOnAViewSample) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Determinism (design §4): the same seed gives a bit-identical image with 1, 2 and 8 threads, for every method.
+// Determinism: the same seed gives a bit-identical image with 1, 2 and 8 threads, for every method.
 TEST(HardCases, BitIdenticalImagesWithOneTwoAndEightThreadsForEveryMethod) {
     Scene scene;
     test::build_cornell_box(scene, true);

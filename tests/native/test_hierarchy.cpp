@@ -503,7 +503,7 @@ TEST(DepthSlice, MatchesTheFormulaByHand) {
     const ClusterKeyParams hd = perspective_params(1920, 1080);
     EXPECT_EQ(depth_slice(1.0f, hd), 270u);     // 270.35
     EXPECT_EQ(depth_slice(10.0f, hd), 540u);    // 540.71
-    EXPECT_EQ(depth_slice(1000.0f, hd), 1081u); // 1081.41 (the 1081 slices of the dossier's table)
+    EXPECT_EQ(depth_slice(1000.0f, hd), 1081u); // 1081.41: ln(1e4)/ln(1.0085534), 1081 slices from near to far
     // Height 1081 needs 136 tile rows, not 135: the last, partial row counts.
     EXPECT_EQ(depth_slice(1000.0f, perspective_params(1920, 1081)), 1089u);  // ln(1e4)/ln(1+2·tan30°/136)
 }
