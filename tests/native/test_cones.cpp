@@ -389,6 +389,24 @@ void report(const char* what, const Outcome& o) {
                 counter(o.cone, "node_rejects_cone_orientation"));
 }
 
+// Samples of `o` and `photons` photons_from_above within `spread` of them, both drawn from `rng`, and the
+// comparison of cluster_cone with brute and cluster at `radius` (reported as `what`).
+struct FromAbove {
+    ViewSamples vs;
+    PhotonMap map;
+    Outcome out;
+};
+
+FromAbove splat_from_above(const SyntheticOptions& o, std::mt19937& rng, size_t photons, float spread, float radius,
+                           const char* what) {
+    FromAbove f;
+    f.vs = random_scene(o, rng);
+    f.map = photons_from_above(f.vs, photons, spread, rng);
+    f.out = compare(f.vs, f.map, splat_params(radius, f.map), key_params(o.width, o.height), what);
+    report(what, f.out);
+    return f;
+}
+
 // A radius as large as the scene: only the cones sort photons out, so lists of a hundred photons and more meet the
 // accepts of the leaves' ancestors in one sample; still brute's sums, and the same bits on any thread count.
 TEST(SplatClusterCone, LongLeafListsWithAccepts) {
@@ -414,10 +432,7 @@ TEST(SplatClusterCone, LargeRadiusAcceptsWholeNodesAndSavesSampleTests) {
     o.specular_fraction = 0.0;
     o.axis_aligned = true;
     o.planes = 2;
-    const ViewSamples vs = random_scene(o, rng);
-    const PhotonMap map = photons_from_above(vs, 1500, 0.2f, rng);
-    const Outcome out = compare(vs, map, splat_params(2.0f, map), key_params(96, 64), "large radius");
-    report("large radius", out);
+    const Outcome out = splat_from_above(o, rng, 1500, 0.2f, 2.0f, "large radius").out;
     EXPECT_GT(counter(out.cone, "node_accepts"), 1000.0);
     EXPECT_GT(counter(out.cone, "accepted_samples"), 0.5 * counter(out.brute, "contributing_pairs"));
     EXPECT_LT(counter(out.cone, "photon_sample_tests"), 0.5 * counter(out.cluster, "photon_sample_tests"));
@@ -453,10 +468,10 @@ TEST(SplatClusterCone, GlossySamplesAreNeverAccepted) {
     o.axis_aligned = true;
     o.specular_fraction = 0.0;
     o.glossy_fraction = 0.01;
-    const ViewSamples vs = random_scene(o, rng);
-    const PhotonMap map = photons_from_above(vs, 2000, 0.3f, rng);
-    const Outcome mixed = compare(vs, map, splat_params(1.0f, map), key_params(48, 40), "1% glossy");
-    report("1% glossy", mixed);
+    const FromAbove f = splat_from_above(o, rng, 2000, 0.3f, 1.0f, "1% glossy");
+    const ViewSamples& vs = f.vs;
+    const PhotonMap& map = f.map;
+    const Outcome& mixed = f.out;
     EXPECT_GT(counter(mixed.cone, "node_accepts"), 0.0);
     // The accepted nodes hold diffuse samples only: count what accepts could reach at most.
     const ClusterHierarchy h = build_with_cones(vs, key_params(48, 40));

@@ -210,15 +210,11 @@ TEST(Directional, LevelZeroApproachesBruteAsNodesShrinkRelativeToR) {
 }
 
 RenderResult render_cornell(SplatMethod method, int level, float radius, int size = 64) {
-    RenderSettings settings;
-    settings.photons = 20000;
+    RenderSettings settings = method_settings(method, 20000, 3);
     settings.radius = radius;
-    settings.method = method;
     settings.directional_level = level;
-    settings.seed = 3;
     settings.direct_samples = 1;
-    RenderControl control;
-    return render(cornell_scene(), cornell_camera(size, size), settings, control);
+    return render_cornell_box(settings, size, size);
 }
 
 TEST(Directional, CornellBoxStaysCloseToBrute) {
@@ -290,6 +286,19 @@ PhotonMap photons_near_samples(const ViewSamples& vs, size_t count, float spread
 // samples. The facet is the same (centroid, axis, sample count) and its bounds only wider, so the image barely
 // moves; nodes across a crease split by whole leaf parts (a leaf across it is summarised as parts split by
 // orientation), unless a leaf holds more orientations than it has parts.
+// plane_view(width, 64, 3) with the samples of columns x ≥ from_x facing normals[x − from_x] (the last of them from
+// there on) instead of the camera.
+ViewSamples folded_plane_view(int width, uint32_t from_x, const std::vector<glm::vec3>& normals) {
+    ViewSamples vs = plane_view(width, 64, 3.0f);
+    for (ViewSample& sample : vs.samples) {
+        const uint32_t x = sample.pixel % uint32_t(width);
+        if (x < from_x) continue;
+        const glm::vec3 n = normals[std::min<size_t>(x - from_x, normals.size() - 1)];
+        sample.normal = sample.shading_normal = sample.wo = n;
+    }
+    return vs;
+}
+
 TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
     std::mt19937 rng(41);
     ClusterBuildOptions with_summaries;
@@ -307,28 +316,20 @@ TEST(Directional, LeafSummariesDescribeFlatNodesAsTheSamplesDo) {
         ViewSamples planes = random_planes_view(rng, 96, 80);
         PhotonMap near = photons_near_samples(planes, 6000, 0.6f, rng);
         cases.push_back({"random planes", std::move(planes), std::move(near)});
+        // Each of these lit by 20000 photons spread evenly over the plane.
+        const auto add_lit = [&](const char* name, ViewSamples vs) {
+            PhotonMap lit = uniform_plane_photons(vs, 20000, 3.0f, 0.5f, rng);
+            cases.push_back({name, std::move(vs), std::move(lit)});
+        };
         // A crease down the middle, inside a column of tiles (x = 50 of 100): its leaves come in two parts.
-        ViewSamples crease = plane_view(100, 64, 3.0f);
-        for (ViewSample& sample : crease.samples)
-            if (sample.pixel % 100 >= 50) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.6f, 0.0f, 0.8f);
-        PhotonMap lit = uniform_plane_photons(crease, 20000, 3.0f, 0.5f, rng);
-        cases.push_back({"crease", std::move(crease), std::move(lit)});
+        add_lit("crease", folded_plane_view(100, 50, {{0.6f, 0.0f, 0.8f}}));
         // Five orientations inside one column of tiles (x = 48, 49, 50, 51, then 52 onwards): a leaf's four parts
         // cannot hold them apart, so the nodes over that column read their samples.
-        ViewSamples fold = plane_view(100, 64, 3.0f);
-        const glm::vec3 normals[] = {{0.6f, 0.0f, 0.8f}, {0.0f, 0.6f, 0.8f}, {-0.6f, 0.0f, 0.8f}, {0.0f, -0.6f, 0.8f}};
-        for (ViewSample& sample : fold.samples) {
-            const uint32_t x = sample.pixel % 100;
-            if (x >= 49) sample.normal = sample.shading_normal = sample.wo = normals[std::min(x - 49, 3u)];
-        }
-        PhotonMap fold_lit = uniform_plane_photons(fold, 20000, 3.0f, 0.5f, rng);
-        cases.push_back({"five orientations", std::move(fold), std::move(fold_lit)});
-        // A sharper crease (53°: 27° from the mean, past kSplitAngle) on a tile boundary (x = 48 of 96): every leaf is flat, nodes across it split by leaves.
-        ViewSamples aligned = plane_view(96, 64, 3.0f);
-        for (ViewSample& sample : aligned.samples)
-            if (sample.pixel % 96 >= 48) sample.normal = sample.shading_normal = sample.wo = glm::vec3(0.8f, 0.0f, 0.6f);
-        PhotonMap aligned_lit = uniform_plane_photons(aligned, 20000, 3.0f, 0.5f, rng);
-        cases.push_back({"tile-aligned crease", std::move(aligned), std::move(aligned_lit)});
+        add_lit("five orientations", folded_plane_view(100, 49, {{0.6f, 0.0f, 0.8f}, {0.0f, 0.6f, 0.8f},
+                                                                 {-0.6f, 0.0f, 0.8f}, {0.0f, -0.6f, 0.8f}}));
+        // A sharper crease (53°: 27° from the mean, past kSplitAngle) on a tile boundary (x = 48 of 96): every
+        // leaf is flat, nodes across it split by leaves.
+        add_lit("tile-aligned crease", folded_plane_view(96, 48, {{0.8f, 0.0f, 0.6f}}));
     }
     for (const Case& c : cases) {
         const ClusterHierarchy plain = build_cluster_hierarchy(c.vs, key_params(c.vs.width, c.vs.height));

@@ -67,15 +67,10 @@ TEST(GatherSplat, PhotonsOnCellBoundariesAndAtDistanceExactlyR) {
     vs.origin = glm::vec3(0.0f);  // world = relative: the distances below stay exact
     for (uint32_t pixel = 0; pixel < 24 * 24; ++pixel) {
         const uint32_t x = pixel % 24, y = pixel / 24;
-        ViewSample s{};
-        s.depth = (x / 4) % 2 ? 2.5f : 5.0f;
+        const float depth = (x / 4) % 2 ? 2.5f : 5.0f;
         // Every other sample on a cell boundary (−10 + k·r), the rest half-way.
-        s.position = glm::vec3(-5.0f + float(x) * 0.3125f, -5.0f + float(y) * 0.3125f, -s.depth);
-        s.normal = s.shading_normal = s.wo = glm::vec3(0, 0, 1);
-        s.albedo = glm::vec3(0.8f, 0.5f, 0.25f);
-        s.throughput = glm::vec3(1.0f);
-        s.pixel = pixel;
-        vs.samples.push_back(s);
+        const glm::vec3 position(-5.0f + float(x) * 0.3125f, -5.0f + float(y) * 0.3125f, -depth);
+        vs.samples.push_back(facing_sample(position, depth, pixel));
     }
     PhotonMap map;
     auto add = [&](const glm::vec3& position) {
@@ -245,22 +240,37 @@ TEST(GatherSplat, ReportsCountersBytesAndStageTimes) {
     print("counters, r 0.1", o);
 }
 
+// The view samples of the Cornell box (cornell_scene) at width × height, and `photons` photon paths traced
+// with `seed`.
+struct CornellStages {
+    ViewSamples samples;
+    PhotonMap map;
+};
+
+CornellStages cornell_stages(int width, int height, uint64_t photons, uint64_t seed) {
+    RenderControl control;
+    Stats stats;
+    CornellStages stages;
+    const Camera camera = cornell_camera(width, height);
+    stages.samples = generate_view_samples(cornell_scene(), camera, ViewSampleSettings{}, control, stats);
+    PhotonSettings settings;
+    settings.count = photons;
+    settings.seed = seed;
+    stages.map = trace_photons(cornell_scene(), settings, control, stats);
+    return stages;
+}
+
 // The Cornell box (with its glass and mirror spheres) through the real stages: view samples, photon tracing,
 // then gather against brute on the same photons, some samples seen through glass or the mirror.
 TEST(GatherSplat, CornellBoxStagesIncludingSamplesBehindGlass) {
     const Scene& scene = cornell_scene();
-    const Camera camera = cornell_camera(56, 56);
-    RenderControl control;
-    Stats stats;
-    const ViewSamples vs = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
-    PhotonSettings photon_settings;
-    photon_settings.count = 15000;
-    photon_settings.seed = 11;
-    const PhotonMap map = trace_photons(scene, photon_settings, control, stats);
+    const CornellStages stages = cornell_stages(56, 56, 15000, 11);
+    const ViewSamples& vs = stages.samples;
+    const PhotonMap& map = stages.map;
     size_t via_specular = 0;
     for (const ViewSample& s : vs.samples) via_specular += (s.flags & kViaSpecular) ? 1 : 0;
     ASSERT_GT(via_specular, 20u) << "the comparison must cover samples behind glass and in the mirror";
-    const float radius = default_radius(scene, photon_settings.count);
+    const float radius = default_radius(scene, 15000);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
         SplatParams params = splat_params(radius, map, kernel);
         params.emitted = map.emitted;
@@ -285,14 +295,10 @@ TEST(GatherBenchmark, DISABLED_GatherVersusClusterAt1080p) {
     const uint64_t photon_count = uint64_t(env("PS_BENCH_PHOTONS", 200000));
     const int repeats = int(env("PS_BENCH_REPEATS", 3));
     const Scene& scene = cornell_scene();
-    const Camera camera = cornell_camera(1920, 1080);
+    const CornellStages stages = cornell_stages(1920, 1080, photon_count, 1);
+    const ViewSamples& vs = stages.samples;
+    const PhotonMap& map = stages.map;
     RenderControl control;
-    Stats setup;
-    const ViewSamples vs = generate_view_samples(scene, camera, ViewSampleSettings{}, control, setup);
-    PhotonSettings photon_settings;
-    photon_settings.count = photon_count;
-    photon_settings.seed = 1;
-    const PhotonMap map = trace_photons(scene, photon_settings, control, setup);
     SplatParams params;
     params.radius = float(default_radius(scene, photon_count) * env("PS_BENCH_RADIUS_SCALE", 1.0));
     params.emitted = map.emitted;
@@ -316,7 +322,7 @@ TEST(GatherBenchmark, DISABLED_GatherVersusClusterAt1080p) {
             Stats stats;
             const auto t = std::chrono::steady_clock::now();
             const std::clock_t c = std::clock();
-            const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, ClusterKeyParams::from_camera(camera));
+            const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, ClusterKeyParams::from_camera(cornell_camera(1920, 1080)));
             cluster_out = splat_cluster(hierarchy, vs, map, params, control, stats);
             cluster_times.push_back(seconds_since(t));
             cluster_cpu.push_back(double(std::clock() - c) / CLOCKS_PER_SEC);

@@ -17,7 +17,7 @@
 #include "photonsplat/scattering.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/view_samples.h"
-#include "test_scenes.h"
+#include "test_support.h"
 
 namespace {
 
@@ -282,18 +282,17 @@ TEST(GlossyMaterial, SmoothGlossyIsAMirrorAndRoughnessIsValidated) {
 TEST(GlossyDirectLight, PointLightHighlightSitsAtTheMirrorPointAndMatchesTheBrdf) {
     Scene scene;
     scene.add_material(glossy_material("metal", glm::vec3(0.9f, 0.7f, 0.5f), 0.2f));
-    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
+    test::add_ground(scene, 20.0f);
     Light light;
     light.kind = LightKind::point;
     light.position = {0.0f, 0.0f, 1.0f};
     light.value = glm::vec3(50.0f);
     scene.add_light(light);
-    const Camera camera = test::look_at({-2, 0, 1}, {-1, 0, 0}, 96, 96, 30.0f);
-    RenderControl control;
-    Stats stats;
-    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    const test::DirectView view =
+        test::direct_light_view(scene, test::look_at({-2, 0, 1}, {-1, 0, 0}, 96, 96, 30.0f));
+    const ViewSamples& samples = view.samples;
+    const std::vector<glm::vec3>& direct = view.direct;
     ASSERT_EQ(samples.samples.size(), 96u * 96u);
-    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
 
     size_t brightest = 0;
     double worst = 0.0;
@@ -319,22 +318,26 @@ TEST(GlossyDirectLight, PointLightHighlightSitsAtTheMirrorPointAndMatchesTheBrdf
     EXPECT_GT(luminance(direct[brightest]), 20.0f * luminance(direct[0])) << "a highlight, not a flat shading";
 }
 
+// A 40 m plane of glossy_material(name, f0, roughness) at z = 0 under a uniform sky of radiance `sky`, nothing else.
+void build_glossy_plane_under_sky(Scene& scene, const char* name, glm::vec3 f0, float roughness, float sky) {
+    scene.add_material(glossy_material(name, f0, roughness));
+    test::add_ground(scene, 20.0f);
+    scene.set_background(glm::vec3(sky));
+}
+
 // Under a uniform sky of radiance 1 (and nothing else), a rough plane reflects exactly its directional albedo
 // ∫ f cos dωi towards each pixel: the furnace integral, computed here by quadrature.
 TEST(GlossyDirectLight, RoughPlaneUnderAUniformSkyReflectsItsDirectionalAlbedo) {
-    Scene scene;
     const glm::vec3 f0(0.95f, 0.64f, 0.54f);
-    scene.add_material(glossy_material("gold", f0, 0.8f));
-    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
-    scene.set_background(glm::vec3(1.0f));
-    const Camera camera = test::look_at({0, -2, 1.5f}, {0, 0, 0}, 24, 24, 40.0f);
-    RenderControl control;
-    Stats stats;
-    const ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
-    ASSERT_EQ(samples.samples.size(), 24u * 24u);
+    Scene scene;
+    build_glossy_plane_under_sky(scene, "gold", f0, 0.8f, 1.0f);
     DirectLightSettings settings;
     settings.samples_per_light = 1024;
-    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, settings, control, stats);
+    const test::DirectView view =
+        test::direct_light_view(scene, test::look_at({0, -2, 1.5f}, {0, 0, 0}, 24, 24, 40.0f), settings);
+    const ViewSamples& samples = view.samples;
+    const std::vector<glm::vec3>& direct = view.direct;
+    ASSERT_EQ(samples.samples.size(), 24u * 24u);
     glm::dvec3 rendered(0.0), expected(0.0);
     for (size_t i = 0; i < samples.samples.size(); i += 7) {  // every 7th sample: the quadrature is the cost
         const ViewSample& s = samples.samples[i];
@@ -355,17 +358,14 @@ TEST(GlossyDirectLight, RoughPlaneUnderAUniformSkyReflectsItsDirectionalAlbedo) 
 // (cosine-weighted sky directions would land in this lobe about once in 700 rays: most pixels would be black). A
 // sample with a diffuse part as well (albedo ρ: it reflects ρ·1 of a uniform sky) gets both.
 TEST(GlossyDirectLight, SharpLobeUnderTheSkyIsSampledByTheLobe) {
-    Scene scene;
     const glm::vec3 f0(0.9f, 0.9f, 0.9f);
-    scene.add_material(glossy_material("chrome", f0, 0.15f));
-    test::add_quad(scene, "plane", {-20, -20, 0}, {20, -20, 0}, {20, 20, 0}, {-20, 20, 0}, 0);
-    scene.set_background(glm::vec3(2.0f));
-    const Camera camera = test::look_at({0, -2, 1.5f}, {0, 0, 0}, 12, 12, 40.0f);
-    RenderControl control;
-    Stats stats;
-    ViewSamples samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    Scene scene;
+    build_glossy_plane_under_sky(scene, "chrome", f0, 0.15f, 2.0f);
+    test::DirectView view =
+        test::direct_light_view(scene, test::look_at({0, -2, 1.5f}, {0, 0, 0}, 12, 12, 40.0f));
+    ViewSamples& samples = view.samples;
+    const std::vector<glm::vec3>& direct = view.direct;
     ASSERT_EQ(samples.samples.size(), 144u);
-    const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
     std::vector<double> albedo(samples.samples.size());
     double squared_error = 0.0, worst = 0.0;
     for (size_t i = 0; i < samples.samples.size(); ++i) {
@@ -379,6 +379,8 @@ TEST(GlossyDirectLight, SharpLobeUnderTheSkyIsSampledByTheLobe) {
     EXPECT_LT(std::sqrt(squared_error / samples.samples.size()), 0.05);
     EXPECT_LT(worst, 0.3);
     for (ViewSample& s : samples.samples) s.albedo = glm::vec3(0.3f);
+    RenderControl control;
+    Stats stats;
     const std::vector<glm::vec3> both = compute_direct_light(scene, samples, DirectLightSettings{}, control, stats);
     double rendered = 0.0, expected = 0.0;
     for (size_t i = 0; i < samples.samples.size(); ++i) {

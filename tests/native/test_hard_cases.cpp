@@ -1,4 +1,4 @@
-// The hard cases of design §6, each rendered with EVERY splat method: the output is finite, the exact methods
+// The hard cases, each rendered with EVERY splat method: the output is finite, the exact methods
 // equal `brute` (relative 1e-4 per component, plus 1e-6 of the image's largest value for summation order), the
 // approximate `directional` is within 10 % of brute's total indirect light, and where an analytic value exists
 // the image is compared with it. Inputs the core refuses must raise InvalidInput naming the cause.
@@ -22,7 +22,7 @@
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/view_samples.h"
-#include "test_scenes.h"
+#include "test_support.h"
 
 namespace {
 
@@ -211,13 +211,8 @@ TEST(HardCases, CornerOfAClosedEmissiveBoxStaysNearTheAnalyticRadiance) {
     const float albedo = 0.5f, le = 1.0f;
     scene.add_material({"wall", MaterialKind::diffuse, glm::vec3(albedo), 1.45f, glm::vec3(le)});
     test::add_box(scene, "box", {-1, -1, -1}, {1, 1, 1}, 0);
-    const Camera camera = test::look_at({0.5f, 0.5f, 0.5f}, {1, 1, 1}, 16, 16, 40.0f);
-    RenderSettings settings;
-    settings.photons = 100000;
-    settings.radius = 0.05f;
-    settings.max_bounces = 32;
-    settings.direct_samples = 8;
-    const auto results = render_every_method(scene, camera, settings, "corner");
+    const auto results = render_every_method(scene, test::look_at({0.5f, 0.5f, 0.5f}, {1, 1, 1}, 16, 16, 40.0f),
+                                             test::emissive_box_settings(100000, 0.05f, 32, 8), "corner");
     for (const auto& [method, r] : results) {
         double mean = 0.0;
         for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba()[4 * p + 1];
@@ -460,12 +455,7 @@ TEST(HardCases, DegenerateTrianglesAreDroppedAndCountedAndNanIsRefusedNamingTheO
     const int32_t t[] = {0, 1, 2,   // collinear: zero area
                          0, 0, 3,   // repeated vertex
                          0, 4, 3};  // finite vertices, but the area overflows to infinity
-    MeshInput mesh;
-    mesh.name = "Junk";
-    mesh.vertices = v;
-    mesh.vertex_count = 5;
-    mesh.triangles = t;
-    mesh.triangle_count = 3;
+    MeshInput mesh = test::mesh_input("Junk", v, 5, t, 3);
     scene.add_mesh(mesh);
     EXPECT_EQ(scene.dropped_triangles(), 3u);
     RenderSettings settings;
@@ -619,15 +609,13 @@ TEST(HardCases, ExtremeRadiiPhotonCountsAndResolution) {
 // 8K (7680×4320) fits this machine's default budget, and is refused before allocating with a smaller one,
 // naming the structure, the resolution to lower and the budget.
 TEST(HardCases, EightKIsRefusedBeforeAllocatingWhenOverTheBudget) {
-    Scene scene;
-    test::build_cornell_box(scene, true);
     const Camera camera = test::cornell_camera(7680, 4320);
     RenderSettings settings;
     settings.photons = 1000;
     settings.memory_budget = uint64_t(1) << 30;  // 1 GiB: 8K needs about 5 GiB
     RenderControl control;
     try {
-        render(scene, camera, settings, control);
+        render(test::cornell_scene(), camera, settings, control);
         FAIL() << "8K fitted in 1 GiB";
     } catch (const InvalidInput& e) {
         EXPECT_EQ(e.field(), "resolution");
@@ -640,7 +628,7 @@ TEST(HardCases, EightKIsRefusedBeforeAllocatingWhenOverTheBudget) {
     MemoryBudget budget(0, stats);
     settings.memory_budget = 0;
     if (default_memory_budget() > (uint64_t(12) << 30)) {
-        EXPECT_NO_THROW(reserve_frame(budget, scene, camera, settings)) << "8K fits the default budget here";
+        EXPECT_NO_THROW(reserve_frame(budget, test::cornell_scene(), camera, settings)) << "8K fits the default budget here";
     }
 }
 
@@ -736,7 +724,7 @@ TEST(HardCases, HundredThousandCoincidentPhotonsOnAViewSample) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-// Determinism (design §4): the same seed gives a bit-identical image with 1, 2 and 8 threads, for every method.
+// Determinism: the same seed gives a bit-identical image with 1, 2 and 8 threads, for every method.
 TEST(HardCases, BitIdenticalImagesWithOneTwoAndEightThreadsForEveryMethod) {
     Scene scene;
     test::build_cornell_box(scene, true);

@@ -222,26 +222,29 @@ ClusterHierarchy build_with_threads(int threads, const ViewSamples& vs, const Cl
     return h;
 }
 
-TEST(ClusterHierarchy, RandomSampleSetsAreValid) {
-    for (uint32_t seed = 1; seed <= 4; ++seed) {
-        const int w = 40 + 13 * int(seed), h = 30 + 7 * int(seed);
-        const ViewSamples vs = random_samples(w, h, seed);
-        const ClusterKeyParams params = perspective_params(w, h);
+// Runs `body` on the random sample sets of seeds 1 … seeds, w0 + dw·seed × h0 + dh·seed pixels each, with their
+// key parameters and size (the seed traced).
+void for_random_sample_sets(uint32_t seeds, int w0, int dw, int h0, int dh,
+                            const std::function<void(const ViewSamples&, const ClusterKeyParams&, int, int)>& body) {
+    for (uint32_t seed = 1; seed <= seeds; ++seed) {
+        const int w = w0 + dw * int(seed), h = h0 + dh * int(seed);
         SCOPED_TRACE(seed);
+        body(random_samples(w, h, seed), perspective_params(w, h), w, h);
+    }
+}
+
+TEST(ClusterHierarchy, RandomSampleSetsAreValid) {
+    for_random_sample_sets(4, 40, 13, 30, 7, [](const ViewSamples& vs, const ClusterKeyParams& params, int w, int h) {
         const ClusterHierarchy hierarchy = build_cluster_hierarchy(vs, params);
         expect_valid_hierarchy(hierarchy, vs, params);
         EXPECT_GT(hierarchy.leaves.size(), size_t(w / 8) * size_t(h / 8) / 2);
-    }
+    });
 }
 
 // Cones are an option of the build: the tree is the same with them, and every node's cone holds its samples'
 // normals (tests/native/test_cones.cpp checks the cones in depth).
 TEST(ClusterHierarchy, BuiltWithNormalConesIsTheSameValidTree) {
-    for (uint32_t seed = 1; seed <= 3; ++seed) {
-        const int w = 45 + 11 * int(seed), h = 33 + 5 * int(seed);
-        const ViewSamples vs = random_samples(w, h, seed);
-        const ClusterKeyParams params = perspective_params(w, h);
-        SCOPED_TRACE(seed);
+    for_random_sample_sets(3, 45, 11, 33, 5, [](const ViewSamples& vs, const ClusterKeyParams& params, int, int) {
         ClusterBuildOptions options;
         options.normal_cones = true;
         const ClusterHierarchy with = build_cluster_hierarchy(vs, params, options);
@@ -262,7 +265,7 @@ TEST(ClusterHierarchy, BuiltWithNormalConesIsTheSameValidTree) {
             }
             EXPECT_EQ(with.node_flags[i], kNodeDiffuseOnly | kNodeRegular);  // all diffuse, unit normals
         }
-    }
+    });
 }
 
 TEST(ClusterHierarchy, ConesAreTheSameWithOneAndTwoThreads) {
@@ -500,7 +503,7 @@ TEST(DepthSlice, MatchesTheFormulaByHand) {
     const ClusterKeyParams hd = perspective_params(1920, 1080);
     EXPECT_EQ(depth_slice(1.0f, hd), 270u);     // 270.35
     EXPECT_EQ(depth_slice(10.0f, hd), 540u);    // 540.71
-    EXPECT_EQ(depth_slice(1000.0f, hd), 1081u); // 1081.41 (the 1081 slices of the dossier's table)
+    EXPECT_EQ(depth_slice(1000.0f, hd), 1081u); // 1081.41: ln(1e4)/ln(1.0085534), 1081 slices from near to far
     // Height 1081 needs 136 tile rows, not 135: the last, partial row counts.
     EXPECT_EQ(depth_slice(1000.0f, perspective_params(1920, 1081)), 1089u);  // ln(1e4)/ln(1+2·tan30°/136)
 }

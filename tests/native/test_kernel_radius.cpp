@@ -54,15 +54,20 @@ TEST(KernelRadius, AWideFloorKeepsTheDefaultRadius) {
     EXPECT_EQ(automatic_radius(scene, camera, 12500), default_radius(scene, 12500));
 }
 
-TEST(KernelRadius, ThinStripsShrinkTheRadius) {
-    // Strips 5 cm wide, 20 cm apart, over 2 m: default_radius (0.17 m at 12.5k photons) is far wider than a
-    // strip, so most of every disc falls between strips.
-    Scene scene;
+// Ten diffuse strips of the z = 0 plane, 5 cm wide, 20 cm apart, over 2 m (x from −1 to 0.85, y from −1 to 1).
+void add_thin_strips(Scene& scene) {
     const uint32_t m = diffuse(scene);
     for (int i = 0; i < 10; ++i) {
         const float x = -1.0f + 0.2f * i;
         test::add_quad(scene, "strip", {x, -1, 0}, {x + 0.05f, -1, 0}, {x + 0.05f, 1, 0}, {x, 1, 0}, m);
     }
+}
+
+TEST(KernelRadius, ThinStripsShrinkTheRadius) {
+    // default_radius (0.17 m at 12.5k photons) is far wider than a strip, so most of every disc falls between
+    // strips.
+    Scene scene;
+    add_thin_strips(scene);
     const Camera camera = test::top_down_camera(2.5f);
     const float r0 = default_radius(scene, 12500);
     ASSERT_GT(r0, 0.15f);
@@ -88,11 +93,7 @@ TEST(KernelRadius, NothingSeenOrOnlyMirrorsKeepTheDefaultRadius) {
 TEST(KernelRadius, OnlyProgressiveRendersTheCorrectionDoesNotCoverStartAtTheAutomaticRadius) {
     // The strips of ThinStripsShrinkTheRadius under a light: there the two radii differ.
     Scene scene;
-    const uint32_t m = diffuse(scene);
-    for (int i = 0; i < 10; ++i) {
-        const float x = -1.0f + 0.2f * i;
-        test::add_quad(scene, "strip", {x, -1, 0}, {x + 0.05f, -1, 0}, {x + 0.05f, 1, 0}, {x, 1, 0}, m);
-    }
+    add_thin_strips(scene);
     scene.add_light(test::point_light("lamp", {0, 0, 2}, 100.0f));
     const Camera camera = test::top_down_camera(2.5f);
     RenderSettings settings;

@@ -49,9 +49,9 @@ TEST_P(ExactMethod, MatchesBruteOnRandomScenesAtEveryRadiusAndBothKernels) {
     size_t samples = 0, identical = 0;
     double accepts = 0.0, facing = 0.0, orientation = 0.0;
     for (uint32_t seed = 1; seed <= 3; ++seed) {
-        std::mt19937 rng(seed);
-        const MethodFrame frame = synthetic_frame(method, SyntheticOptions{}, rng);
-        const PhotonMap map = synthetic_photons(frame.samples, 3000, 0.5f, rng);
+        const SyntheticSplat in = synthetic_splat(method, seed, 3000, 0.5f);
+        const MethodFrame& frame = in.frame;
+        const PhotonMap& map = in.map;
         for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
             for (float radius : {1e-3f, 0.05f, 0.3f, 1.5f, 1e3f}) {  // tiny … larger than the scene
                 const std::string what = "seed " + std::to_string(seed) + " " + to_string(kernel) + " radius " +
@@ -88,29 +88,22 @@ TEST_P(ExactMethod, MatchesBruteOnRandomScenesAtEveryRadiusAndBothKernels) {
 
 TEST_P(ExactMethod, MatchesBruteWithPlaneDistanceAndStrictNormals) {
     const SplatMethod method = GetParam();
-    std::mt19937 rng(17);
-    const SyntheticOptions options;
-    const MethodFrame frame = synthetic_frame(method, options, rng);
-    const PhotonMap map = synthetic_photons(frame.samples, 2000, 0.4f, rng);
+    const SyntheticSplat in = synthetic_splat(method, 17, 2000, 0.4f);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov}) {
-        SplatParams params = splat_params(0.25f, map, kernel);
+        SplatParams params = splat_params(0.25f, in.map, kernel);
         params.plane_distance_factor = 0.2f;
         params.cos_normal_tolerance = 0.9f;
-        const Comparison c = compare_with_brute(method, frame.input(), map, params, to_string(kernel));
+        const Comparison c = compare_with_brute(method, in.frame.input(), in.map, params, to_string(kernel));
         EXPECT_GT(counter(c.brute, "contributing_pairs"), 0.0);
     }
 }
 
 // The brute render of the Cornell box, made once for all the methods compared with it.
 RenderResult render_cornell(SplatMethod method, Kernel kernel, int threads) {
-    RenderSettings settings;
-    settings.photons = 5000;
-    settings.method = method;
+    RenderSettings settings = method_settings(method, 5000, 7);
     settings.kernel = kernel;
     settings.threads = threads;
-    settings.seed = 7;
-    RenderControl control;
-    return render(cornell_scene(), cornell_camera(40, 36), settings, control);
+    return render_cornell_box(settings, 40, 36);
 }
 
 const RenderResult& brute_render(Kernel kernel) {
@@ -158,9 +151,9 @@ TEST_P(ExactMethod, RenderOfTheCornellBoxEqualsBrute) {
 // within a fraction of a second. A small pair cap makes the batched methods cut the work in many batches.
 TEST_P(ExactMethod, StopsPromptlyWhenCancelledMidway) {
     const SplatMethod method = GetParam();
-    std::mt19937 rng(71);
-    const MethodFrame frame = synthetic_frame(method, sized(160, 120), rng);
-    const PhotonMap map = synthetic_photons(frame.samples, 200000, 0.5f, rng);
+    const SyntheticSplat in = synthetic_splat(method, 71, 200000, 0.5f, sized(160, 120));
+    const MethodFrame& frame = in.frame;
+    const PhotonMap& map = in.map;
     SplatParams params = splat_params(1e3f, map);
     params.max_pairs_in_memory = 4000;
     RenderControl control;
@@ -188,9 +181,9 @@ TEST_P(AnyMethod, SameOutputAndCountersWithOneTwoAndEightThreads) {
     // Let TBB run more threads than a 2-core machine has, so that 8 threads really interleave.
     tbb::global_control allow(tbb::global_control::max_allowed_parallelism, 8);
     const SplatMethod method = GetParam();
-    std::mt19937 rng(59);
-    const MethodFrame frame = synthetic_frame(method, sized(96, 80), rng);
-    const PhotonMap map = synthetic_photons(frame.samples, 5000, 0.5f, rng);
+    const SyntheticSplat in = synthetic_splat(method, 59, 5000, 0.5f, sized(96, 80));
+    const MethodFrame& frame = in.frame;
+    const PhotonMap& map = in.map;
     // The default pair cap, and a small one: many batches with several ranges in flight.
     const uint64_t small_cap = 8 * std::max<uint64_t>(frame.hierarchy.leaves.size(), 64);
     for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
@@ -258,37 +251,34 @@ TEST_P(AnyMethod, ZeroPhotonsGiveZeroRadianceAndZeroSamplesNoOutput) {
 
 TEST_P(AnyMethod, RefusesBadParams) {
     const SplatMethod method = GetParam();
-    std::mt19937 rng(73);
-    const SyntheticOptions options;
-    const MethodFrame frame = synthetic_frame(method, options, rng);
-    const PhotonMap map = synthetic_photons(frame.samples, 100, 0.5f, rng);
+    const SyntheticSplat in = synthetic_splat(method, 73, 100, 0.5f);
     RenderControl control;
     Stats stats;
+    const auto refused = [&](const SplatParams& params) {
+        return run_splat(method, in.frame.input(), in.map, params, control, stats);
+    };
     for (float radius : {0.0f, -1.0f, NAN, INFINITY})
-        EXPECT_THROW(run_splat(method, frame.input(), map, splat_params(radius, map), control, stats), InvalidInput)
-            << "radius " << radius;
-    SplatParams no_emitted = splat_params(0.3f, map);
+        EXPECT_THROW(refused(splat_params(radius, in.map)), InvalidInput) << "radius " << radius;
+    SplatParams no_emitted = splat_params(0.3f, in.map);
     no_emitted.emitted = 0;
-    EXPECT_THROW(run_splat(method, frame.input(), map, no_emitted, control, stats), InvalidInput);
-    SplatParams no_pairs = splat_params(0.3f, map);
+    EXPECT_THROW(refused(no_emitted), InvalidInput);
+    SplatParams no_pairs = splat_params(0.3f, in.map);
     no_pairs.max_pairs_in_memory = 0;
-    EXPECT_THROW(run_splat(method, frame.input(), map, no_pairs, control, stats), InvalidInput);
+    EXPECT_THROW(refused(no_pairs), InvalidInput);
     EXPECT_EQ(splat_method_from_string(to_string(method)), method);
 }
 
 TEST_P(AnyMethod, CancelledBeforeStartThrows) {
     const SplatMethod method = GetParam();
-    std::mt19937 rng(67);
-    const SyntheticOptions options;
-    const MethodFrame frame = synthetic_frame(method, options, rng);
-    const PhotonMap map = synthetic_photons(frame.samples, 1000, 0.5f, rng);
+    const SyntheticSplat in = synthetic_splat(method, 67, 1000, 0.5f);
     RenderControl control;
     control.request_cancel();
     Stats stats;
     for (int level : {0, -1}) {  // directional: a fixed level, and one chosen from r
-        SplatParams params = splat_params(0.3f, map);
+        SplatParams params = splat_params(0.3f, in.map);
         params.directional_level = level;
-        EXPECT_THROW(run_splat(method, frame.input(), map, params, control, stats), Cancelled) << "level " << level;
+        EXPECT_THROW(run_splat(method, in.frame.input(), in.map, params, control, stats), Cancelled)
+            << "level " << level;
     }
 }
 

@@ -11,38 +11,22 @@
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/view_samples.h"
-#include "test_scenes.h"
+#include "test_support.h"
 
 namespace {
 
 using namespace ps;
 
 RenderResult render_cornell(SplatMethod method, int threads, uint64_t photons = 20000, int size = 64) {
-    static Scene* scene = [] {
-        auto* s = new Scene;
-        test::build_cornell_box(*s, true);
-        return s;
-    }();
-    RenderSettings settings;
-    settings.photons = photons;
-    settings.method = method;
+    RenderSettings settings = test::method_settings(method, photons, 7);
     settings.threads = threads;
-    settings.seed = 7;
-    RenderControl control;
-    return render(*scene, test::cornell_camera(size, size), settings, control);
+    return test::render_cornell_box(settings, size, size);
 }
 
 TEST(Render, ClusterEqualsBruteOnTheCornellBox) {
     const RenderResult brute = render_cornell(SplatMethod::brute, 0);
     const RenderResult cluster = render_cornell(SplatMethod::cluster, 0);
-    ASSERT_EQ(brute.film[ps::FilmOutput::indirect].size(), cluster.film[ps::FilmOutput::indirect].size());
-    double indirect_sum = 0.0;
-    for (size_t i = 0; i < brute.film[ps::FilmOutput::indirect].size(); ++i) {
-        const float b = brute.film[ps::FilmOutput::indirect][i], c = cluster.film[ps::FilmOutput::indirect][i];
-        EXPECT_LE(std::fabs(b - c), 1e-4f * std::max(std::fabs(b), 1e-6f)) << "component " << i;
-        indirect_sum += b;
-    }
-    EXPECT_GT(indirect_sum, 0.0) << "the box has indirect light, so the comparison is not vacuous";
+    test::expect_same_indirect(brute, cluster, "the box has indirect light, so the comparison is not vacuous");
     EXPECT_EQ(brute.stats.counters.at("contributing_pairs"), cluster.stats.counters.at("contributing_pairs"));
     EXPECT_LT(cluster.stats.counters.at("photon_sample_tests"), brute.stats.counters.at("photon_sample_tests") / 10);
 }
@@ -161,14 +145,9 @@ TEST(Render, ClosedEmissiveBoxReachesLeOverOneMinusAlbedo) {
     test::add_quad(scene, "back", c[3], c[2], c[6], c[7], 0);
     test::add_quad(scene, "left", c[0], c[3], c[7], c[4], 0);
     test::add_quad(scene, "right", c[1], c[5], c[6], c[2], 0);
-    const Camera camera = test::look_at({0, 0, 0}, {0, 1, 0}, 16, 16, 30.0f);
-    RenderSettings settings;
-    settings.photons = 400000;
-    settings.radius = 0.1f;
-    settings.max_bounces = 64;
-    settings.direct_samples = 16;
     RenderControl control;
-    const RenderResult r = render(scene, camera, settings, control);
+    const RenderResult r = render(scene, test::look_at({0, 0, 0}, {0, 1, 0}, 16, 16, 30.0f),
+                                  test::emissive_box_settings(400000, 0.1f, 64, 16), control);
     double mean = 0.0;
     for (size_t p = 0; p < 16 * 16; ++p) mean += r.rgba()[4 * p + 1];
     mean /= 16 * 16;

@@ -11,35 +11,41 @@
 
 namespace ps::test {
 
+// A mesh of vertex_count vertices (xyz each) and triangle_count triangles (three vertex indices each), with a
+// material per triangle where `materials` is given (else material 0), placed by `transform`.
+inline MeshInput mesh_input(const char* name, const float* vertices, size_t vertex_count, const int32_t* triangles,
+                            size_t triangle_count, const int32_t* materials = nullptr,
+                            const glm::dmat4& transform = glm::dmat4(1.0)) {
+    MeshInput mesh;
+    mesh.name = name;
+    mesh.vertices = vertices;
+    mesh.vertex_count = vertex_count;
+    mesh.triangles = triangles;
+    mesh.triangle_count = triangle_count;
+    mesh.material_ids = materials;
+    mesh.transform = transform;
+    return mesh;
+}
+
 inline void add_quad(Scene& scene, const char* name, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d,
                      uint32_t material, const glm::dmat4& transform = glm::dmat4(1.0)) {
     const float v[12] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
     const int32_t t[6] = {0, 1, 2, 0, 2, 3};
     const int32_t m[2] = {static_cast<int32_t>(material), static_cast<int32_t>(material)};
-    MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = v;
-    mesh.vertex_count = 4;
-    mesh.triangles = t;
-    mesh.triangle_count = 2;
-    mesh.material_ids = m;
-    mesh.transform = transform;
-    scene.add_mesh(mesh);
+    scene.add_mesh(mesh_input(name, v, 4, t, 2, m, transform));
+}
+
+// The square [-half, half]² of the z = 0 plane, named "plane", facing +z.
+inline void add_ground(Scene& scene, float half, uint32_t material = 0) {
+    add_quad(scene, "plane", {-half, -half, 0}, {half, -half, 0}, {half, half, 0}, {-half, half, 0}, material);
 }
 
 // A mesh from flat arrays: xyz per vertex, three vertex indices and one material per triangle, optional normals.
 inline void add_mesh(Scene& scene, const char* name, const std::vector<float>& v, const std::vector<int32_t>& t,
                      const std::vector<int32_t>& m, const std::vector<float>* normals = nullptr,
                      const glm::dmat4& transform = glm::dmat4(1.0)) {
-    MeshInput mesh;
-    mesh.name = name;
-    mesh.vertices = v.data();
-    mesh.vertex_count = v.size() / 3;
-    mesh.triangles = t.data();
-    mesh.triangle_count = t.size() / 3;
+    MeshInput mesh = mesh_input(name, v.data(), v.size() / 3, t.data(), t.size() / 3, m.data(), transform);
     mesh.normals = normals ? normals->data() : nullptr;
-    mesh.material_ids = m.data();
-    mesh.transform = transform;
     scene.add_mesh(mesh);
 }
 
@@ -146,6 +152,15 @@ inline Light point_light(const char* name, glm::vec3 position, float watts, floa
     light.position = position;
     light.value = glm::vec3(watts / (4.0f * 3.14159265f));  // Blender's point light of `watts`
     light.radius = radius;
+    return light;
+}
+
+// A sun of `irradiance` travelling along `direction` (unit).
+inline Light sun_light(glm::vec3 direction, glm::vec3 irradiance) {
+    Light light;
+    light.kind = LightKind::sun;
+    light.direction = direction;
+    light.value = irradiance;
     return light;
 }
 

@@ -23,6 +23,7 @@
 #include <glm/geometric.hpp>
 
 #include "photonsplat/camera.h"
+#include "photonsplat/direct_light.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/photons.h"
@@ -224,6 +225,19 @@ inline PhotonMap synthetic_photons(const ViewSamples& vs, size_t count, float sp
     return map;
 }
 
+// A sample of pixel `pixel` at `position`, `depth` from the camera, on a surface facing the camera (+z), albedo
+// (0.8, 0.5, 0.25).
+inline ViewSample facing_sample(const glm::vec3& position, float depth, uint32_t pixel) {
+    ViewSample s{};
+    s.depth = depth;
+    s.position = position;
+    s.normal = s.shading_normal = s.wo = glm::vec3(0, 0, 1);
+    s.albedo = glm::vec3(0.8f, 0.5f, 0.25f);
+    s.throughput = glm::vec3(1.0f);
+    s.pixel = pixel;
+    return s;
+}
+
 // A grid of 32 × 32 samples facing the camera at binary-fraction positions (distances between them and photons
 // placed at binary fractions are exact in float), at depth 2 or 8 by columns of 4: depth discontinuities inside
 // tiles. Origin 0, so that world and relative positions are the same.
@@ -234,14 +248,8 @@ inline ViewSamples binary_grid_samples() {
     vs.origin = glm::vec3(0.0f);
     for (uint32_t pixel = 0; pixel < 32 * 32; ++pixel) {
         const uint32_t x = pixel % 32, y = pixel / 32;
-        ViewSample s{};
-        s.depth = (x / 4) % 2 ? 2.0f : 8.0f;
-        s.position = glm::vec3(float(x) * 0.25f, float(y) * 0.25f, -s.depth);
-        s.normal = s.shading_normal = s.wo = glm::vec3(0, 0, 1);
-        s.albedo = glm::vec3(0.8f, 0.5f, 0.25f);
-        s.throughput = glm::vec3(1.0f);
-        s.pixel = pixel;
-        vs.samples.push_back(s);
+        const float depth = (x / 4) % 2 ? 2.0f : 8.0f;
+        vs.samples.push_back(facing_sample(glm::vec3(float(x) * 0.25f, float(y) * 0.25f, -depth), depth, pixel));
     }
     return vs;
 }
@@ -326,6 +334,21 @@ inline MethodFrame synthetic_frame(SplatMethod method, const SyntheticOptions& o
     return MethodFrame(method, synthetic_view_samples(o, rng), synthetic_camera(o));
 }
 
+// A method's synthetic frame and `count` photons around its samples (within `spread`), drawn in that order from
+// one generator seeded with `seed`.
+struct SyntheticSplat {
+    MethodFrame frame;
+    PhotonMap map;
+};
+
+inline SyntheticSplat synthetic_splat(SplatMethod method, uint32_t seed, size_t count, float spread,
+                                      const SyntheticOptions& o = {}) {
+    std::mt19937 rng(seed);
+    MethodFrame frame = synthetic_frame(method, o, rng);
+    PhotonMap map = synthetic_photons(frame.samples, count, spread, rng);
+    return {std::move(frame), std::move(map)};
+}
+
 // The default synthetic options at another image size.
 inline SyntheticOptions sized(int width, int height, SyntheticOptions o = {}) {
     o.width = width;
@@ -393,16 +416,62 @@ inline const Scene& cornell_scene() {
 }
 
 // Two renders' indirect components agree to 1e-4 relative (of the first, floored at 1e-6), and the first is
-// not all black.
-inline void expect_same_indirect(const RenderResult& expected, const RenderResult& actual) {
-    ASSERT_EQ(expected.film[ps::FilmOutput::indirect].size(), actual.film[ps::FilmOutput::indirect].size());
+// not all black (`why_not_black` says why that matters).
+inline void expect_same_indirect(const RenderResult& expected, const RenderResult& actual,
+                                 const char* why_not_black = "") {
+    const std::vector<float>& e = expected.film[ps::FilmOutput::indirect];
+    const std::vector<float>& a = actual.film[ps::FilmOutput::indirect];
+    ASSERT_EQ(e.size(), a.size());
     double sum = 0.0;
-    for (size_t i = 0; i < expected.film[ps::FilmOutput::indirect].size(); ++i) {
-        const float e = expected.film[ps::FilmOutput::indirect][i], a = actual.film[ps::FilmOutput::indirect][i];
-        EXPECT_LE(std::fabs(e - a), 1e-4f * std::max(std::fabs(e), 1e-6f)) << "component " << i;
-        sum += e;
+    for (size_t i = 0; i < e.size(); ++i) {
+        EXPECT_LE(std::fabs(e[i] - a[i]), 1e-4f * std::max(std::fabs(e[i]), 1e-6f)) << "component " << i;
+        sum += e[i];
     }
-    EXPECT_GT(sum, 0.0);
+    EXPECT_GT(sum, 0.0) << why_not_black;
+}
+
+// Settings of a render with `method`, `photons` photon paths and `seed`; the rest left at their defaults.
+inline RenderSettings method_settings(SplatMethod method, uint64_t photons, uint64_t seed) {
+    RenderSettings settings;
+    settings.method = method;
+    settings.photons = photons;
+    settings.seed = seed;
+    return settings;
+}
+
+// The Cornell box of cornell_scene rendered with `settings`, seen by cornell_camera(width, height).
+inline RenderResult render_cornell_box(const RenderSettings& settings, int width, int height) {
+    RenderControl control;
+    return render(cornell_scene(), cornell_camera(width, height), settings, control);
+}
+
+// Settings for a closed box of emissive walls: `photons` photon paths of up to `max_bounces`, kernel radius
+// `radius`, `direct_samples` shadow rays a light.
+inline RenderSettings emissive_box_settings(uint64_t photons, float radius, int max_bounces, int direct_samples) {
+    RenderSettings settings;
+    settings.photons = photons;
+    settings.radius = radius;
+    settings.max_bounces = max_bounces;
+    settings.direct_samples = direct_samples;
+    return settings;
+}
+
+// ---- direct light ------------------------------------------------------------------------------------------
+
+// The view samples `camera` sees of `scene`, and the direct light at each of them.
+struct DirectView {
+    ViewSamples samples;
+    std::vector<glm::vec3> direct;
+};
+
+inline DirectView direct_light_view(const Scene& scene, const Camera& camera,
+                                    const DirectLightSettings& settings = DirectLightSettings{}) {
+    RenderControl control;
+    Stats stats;
+    DirectView view;
+    view.samples = generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
+    view.direct = compute_direct_light(scene, view.samples, settings, control, stats);
+    return view;
 }
 
 // ---- cancelling from another thread --------------------------------------------------------------------------

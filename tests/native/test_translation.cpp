@@ -26,14 +26,8 @@ uint32_t add_unit_quad(Scene& scene, uint32_t material) {
     const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
     const int32_t t[6] = {0, 1, 2, 0, 2, 3};
     const int32_t m[2] = {static_cast<int32_t>(material), static_cast<int32_t>(material)};
-    MeshInput mesh;
-    mesh.name = "quad";
-    mesh.vertices = v;
-    mesh.vertex_count = 4;
-    mesh.triangles = t;
-    mesh.triangle_count = 2;
+    MeshInput mesh = test::mesh_input("quad", v, 4, t, 2, m);
     mesh.uvs = uv;
-    mesh.material_ids = m;
     return scene.add_mesh_data(mesh);
 }
 
