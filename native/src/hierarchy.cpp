@@ -168,7 +168,7 @@ std::vector<KeyedSample> key_samples(const ViewSamples& samples, const ClusterKe
 // Built in double; stored as float with the slack below, which covers the float rounding of the stored axis and
 // of cos θ, sin θ (~1e-7 rad) many times over.
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kLeafConeSlack = 1e-4;   // rad, added to a leaf's largest angle (the dossier's inflation)
+constexpr double kLeafConeSlack = 1e-4;   // rad, added to a leaf's largest angle: float rounding of the normals
 constexpr double kMergeConeSlack = 1e-6;  // rad, added by each merge (acos and float storage rounding)
 // A normal is "regular" when finite and of length 1 within this: the cone tests rely on it.
 constexpr double kUnitTolerance = cone_tests::kNormalLengthTolerance;
@@ -201,7 +201,7 @@ DCone cone_of_unit_directions(const glm::dvec3* unit, size_t count) {
     return cone;
 }
 
-// The smallest cone containing both (the dossier's merge, 1.4.3): around the great-circle arc between the axes.
+// The smallest cone containing both: around the great-circle arc between the axes.
 DCone merge(const DCone& a, const DCone& b) {
     if (a.full() || b.full()) return full_cone();
     const double phi = angle_between(a.axis, b.axis);

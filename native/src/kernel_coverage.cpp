@@ -130,8 +130,9 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     std::vector<float> coverage(count, 1.0f);
     if (count == 0 || !(params.radius > 0.0f)) return coverage;
     const ProbePattern pattern(seed, params.kernel);
-    // Glossy samples keep their estimate: on glossy_row's spheres (a kernel 1.6× their radius) dividing by the
-    // coverage brightened their lit tops by 10-20 % and lowered the SSIM of every pass.
+    // Glossy samples keep their estimate: where the kernel is wider than a curved glossy surface (glossy_row's
+    // spheres) dividing by the coverage brightened their lit tops and lowered the SSIM of every iteration
+    // (docs/results/README.md, "Boundary correction").
     const auto probed = [&](size_t i) { return !(samples.samples[i].flags & kGlossy); };
     // The coverage changes over the kernel's width, many pixels wide: half the samples (a checkerboard of
     // pixels) are probed, and the other half take the mean of their probed left and right neighbours where

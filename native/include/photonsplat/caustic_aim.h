@@ -1,7 +1,7 @@
 // Photons aimed at mirrors and glass. A caustic needs a photon that reaches a specular object, and those are
-// few: in the caustic Cornell box about 3 % of a point light's photons hit one of its two spheres, so the
-// caustic under the glass sphere is lit by a few hundred photons per pass while the rest of the photons light
-// the walls. Like Jensen's projection maps and ISPM's caustic photons, each pass therefore also emits
+// few wherever the specular objects subtend a small solid angle from the lights, so a caustic is lit by a few
+// hundred photons per iteration while the rest of the photons light the walls (docs/architecture.md gives the
+// caustic Cornell box's figures). Like Jensen's projection maps and ISPM's caustic photons, each iteration therefore also emits
 // `aimed_photons` × photons extra photons from the point, spot and area lights into cones around the bounding
 // spheres of the specular instances, and keeps from those only what they store as caustics (light → specular+
 // → first diffuse or glossy hit; their path then ends).

@@ -122,7 +122,7 @@ NormalCone cone_of_directions(const std::vector<glm::vec3>& directions);
 // A cone containing both, as the hierarchy merges children. Exposed for tests.
 NormalCone merge_cones(const NormalCone& a, const NormalCone& b);
 
-// The node tests of the cluster_cone traversal (Moreau et al. 2016; dossier 1.4.2–1.4.4), all conservative
+// The node tests of the cluster_cone traversal (Moreau et al. 2016), all conservative
 // against the per-sample test of splat.h AS IT IS COMPUTED IN FLOAT: a reject never drops a sample that test
 // would take, an accept never includes one it would refuse.
 //

@@ -1,10 +1,10 @@
-// Image metrics: how far an image is from a reference. Two families, as the design (§5) asks:
+// Image metrics: how far an image is from a reference. Two families:
 //
 //   On the DISPLAY image (what a viewer sees): PSNR and SSIM on the luma of the display-encoded image:
 //     each channel linear → clamp to [0, 1] → sRGB transfer curve (IEC 61966-2-1), then
 //     Y' = 0.2126 R' + 0.7152 G' + 0.0722 B'  (Rec. 709 weights applied to the ENCODED values, i.e. luma, the
-//     way most SSIM/PSNR figures of rendering papers are computed on 8-bit display images; design.md names the
-//     display transform and not where the weights go, so this is our documented choice). Data range 1.
+//     way most SSIM/PSNR figures of rendering papers are computed on 8-bit display images; where the weights
+//     go is our documented choice, docs/reference.md). Data range 1.
 //   On LINEAR radiance (what the renderer computes): RMSE and relative MSE over all pixels and the 3 channels.
 //
 // SSIM follows Wang et al. 2004 with an 11×11 Gaussian window (σ = 1.5, truncated at 3.5 σ: radius 5),

@@ -1,4 +1,4 @@
-// The reference renderer: a converged image that every fast method is measured against (design §2, §5.3).
+// The reference renderer: a converged image that every fast method is measured against (docs/reference.md).
 //
 // Two estimators, each owning a disjoint part of path space, so their sum counts every light path once:
 //

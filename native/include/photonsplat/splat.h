@@ -22,8 +22,8 @@ class RenderControl;
 struct Stats;
 struct ClusterHierarchy;
 
-// The methods of the design (§2). All but `directional` are exact: the same photons give the same image as
-// `brute`, up to float summation order.
+// The splatting methods (splatter.h registers them). All but `directional` are exact: the same photons give the
+// same image as `brute`, up to float summation order.
 enum class SplatMethod {
     brute,         // every photon × every view sample: the oracle
     tiled,         // Mara et al. 2013: 32×32 screen tiles with per-tile depth bounds
@@ -74,7 +74,7 @@ void validate(const ClusterHierarchy& hierarchy, const ViewSamples& samples, con
 // Photon positions relative to the view samples' origin: all methods splat in these coordinates.
 std::vector<glm::vec3> relative_photon_positions(const PhotonMap& photons, const glm::vec3& origin);
 
-// The per-sample test of the design (§3): distance, facing, normal agreement, optional plane distance.
+// The per-sample test: distance, facing, normal agreement, optional plane distance.
 // `p` is the photon position relative to the samples' origin.
 inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const Photon& photon,
                                   const SplatParams& params) {

@@ -40,7 +40,7 @@
 // deterministic. At the end a top-down pass adds every node's accumulator to its children's, and each sample
 // adds its leaf's total × its BRDF (diffuse: f = ρ/π whatever ωi) to what its list gave it.
 // Kernels: uniform K is constant inside the sphere, so the accumulator is ΣΦ. Epanechnikov stays exact through
-// per-node moments S0 = ΣΦ, S1 = ΣΦ·q, S2 = ΣΦ·|q|² with q = p − (node box centre) (dossier 1.4.4):
+// per-node moments S0 = ΣΦ, S1 = ΣΦ·q, S2 = ΣΦ·|q|² with q = p − (node box centre):
 //     ΣΦ·(1 − |x' − q|²/r²) = (1 − |x'|²/r²)·S0 + (2/r²)·x'·S1 − S2/r²,   x' = x − (box centre),
 // shifted to each child's centre on the way down (S1 += δ·S0, S2 += 2δ·S1 + |δ|²·S0). Its accept also asks the
 // box to lie within |x − p|² < 0.95·r², so that every accepted weight 2(1 − |x − p|²/r²) is >= 0.1, where the

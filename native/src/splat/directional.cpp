@@ -8,7 +8,7 @@
 //    L = params.directional_level (clamped to the root's height), or, for -1, the highest level whose median
 //    node diagonal (the node holding the median sample) is still <= r: nodes about as large as the kernel, so
 //    that a node's samples lie within about r/2 of its centroid. When even the leaves are more than 2r across,
-//    that resolution is gone (dossier §7 item 12: a radius shrinking pass after pass would converge to blocks),
+//    that resolution is gone (a radius shrinking iteration after iteration would converge to blocks),
 //    and the automatic level falls back to the exact cluster splat.
 // 2. Facets. A cut node whose normals spread by more than kSplitAngle (a tile across a corner, a silhouette) is
 //    split by orientation into two facets (two seeds, then one k-means step on the normals); any other node is

@@ -16,15 +16,12 @@
 // Order. Within a cell the photons ascend, but a sample's photons come from several cells. The photons of a
 // cell range are merged into one list in ascending index (a bottom-up merge of the cells' runs), and that list
 // is kept per thread and reused by the next samples for as long as their cell range is the same: neighbouring
-// pixels mostly share it (at 1080p, ~8 samples per list), so ordering costs a merge per list rather than a sort
-// per sample. Measured at 1080p on the Cornell box with 200k photons, one core: sorting the passing photons of
-// each sample cost 3.8 s of CPU, merging them per sample 2.8 s, shared lists 1.6 s, and adding them up in cell
-// order (no ordering at all, bit-identical in practice but not by construction) 1.6 s. So order is free here.
+// pixels mostly share it, so ordering costs a merge per list rather than a sort per sample (docs/benchmarks.md,
+// "Gather's design", has the measurement against a sort per sample and against no ordering at all).
 //
-// Cell size. h = r was the fastest of r/2, 3r/4, r, 3r/2 and 2r in that measurement (CPU 2.2, 2.3, 1.6, 2.0,
-// 1.8 s): a sphere overlaps 2–3 cells per axis, a tested volume of ~27 r³ (tests ÷ contributing pairs = 3.0
-// there); smaller cells test less but change their range more often (more lists to merge) and have more
-// runs to merge; larger ones test more (2r: 5.4 tests per contributing pair).
+// Cell size. h = r: a sphere overlaps 2–3 cells per axis, a tested volume of ~27 r³; smaller cells test less but
+// change their range more often (more lists to merge) and have more runs to merge; larger ones test more. It was
+// the fastest of r/2 to 2r (docs/benchmarks.md, "Gather's design").
 //
 // No photon can be missed (the argument, since it is what makes the method exact). If a photon passes the test,
 // then for each axis a the float d_a = x_a − p_a has fl(d_a²) <= dot(d, d) < fl(r·r) (a sum of non-negative

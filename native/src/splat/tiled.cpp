@@ -4,7 +4,7 @@
 //      rectangle (four planes through the eye; parallel planes for an orthographic camera) and the depth range
 //      [z_min, z_max] of its view samples;
 //   2. binning: each photon's sphere (radius r) is projected to a screen rectangle analytically (the tangent
-//      planes through the eye, §2.2 of the algorithms dossier; the whole screen when the sphere reaches the eye
+//      planes through the eye; the whole screen when the sphere reaches the eye
 //      plane), and every tile of that rectangle whose frustum planes and depth range the sphere meets gets a
 //      (tile, photon) pair. A stable counting sort turns the pairs into one photon list per tile, photon indices
 //      ascending;
