@@ -16,10 +16,10 @@ namespace ps {
 
 namespace {
 
-// Clears, on every exit, the flag that keeps two passes from running at once on one object.
+// Clears, on every exit, the flag that keeps two iterations from running at once on one object.
 struct RunningFlag {
     explicit RunningFlag(std::atomic<bool>& flag) : flag_(flag) {
-        if (flag_.exchange(true)) throw std::runtime_error("a progressive pass is already running on this render");
+        if (flag_.exchange(true)) throw std::runtime_error("a progressive iteration is already running on this render");
     }
     ~RunningFlag() { flag_.store(false); }
     std::atomic<bool>& flag_;
@@ -52,28 +52,28 @@ void ProgressiveRender::run_iteration(RenderControl& control) {
         radius = static_cast<float>(std::sqrt(radius_sq_));
         elapsed = elapsed_;
     }
-    // Progress: this pass's share of the whole, by pass count or by time, whichever is further along.
+    // Progress: this iteration's share of the whole, by count or by time, whichever is further along.
     double start = 0.0, end = 1.0;
-    std::string prefix = "pass " + std::to_string(index + 1);
+    std::string prefix = "iteration " + std::to_string(index + 1);
     if (settings_.iterations > 0) {
         start = static_cast<double>(index) / settings_.iterations;
         end = static_cast<double>(index + 1) / settings_.iterations;
         prefix += "/" + std::to_string(settings_.iterations);
     }
     if (settings_.time_limit > 0.0 && index > 0) {
-        const double per_pass = elapsed / index;
+        const double per_iteration = elapsed / index;
         if (elapsed / settings_.time_limit > start) {
             start = elapsed / settings_.time_limit;
-            end = (elapsed + per_pass) / settings_.time_limit;
+            end = (elapsed + per_iteration) / settings_.time_limit;
         }
     }
     control.set_span(std::min(start, 1.0), std::min(end, 1.0), prefix + ": ");
 
     const auto began = std::chrono::steady_clock::now();
-    IterationParams pass;
-    pass.index = index;
-    pass.radius = radius;
-    RenderResult r = render_iteration(scene_, camera_, settings_, pass, control);
+    IterationParams iteration;
+    iteration.index = index;
+    iteration.radius = radius;
+    RenderResult r = render_iteration(scene_, camera_, settings_, iteration, control);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
 
     std::lock_guard<std::mutex> lock(mutex_);
@@ -86,7 +86,7 @@ void ProgressiveRender::run_iteration(RenderControl& control) {
     ++iterations_done_;
     elapsed_ += seconds;
     last_radius_ = radius;
-    // Knaus & Zwicker, 1-based: r_{i+1}² = r_i²·(i + α)/(i + 1), i = the passes now done.
+    // Knaus & Zwicker, 1-based: r_{i+1}² = r_i²·(i + α)/(i + 1), i = the iterations now done.
     const double i = static_cast<double>(iterations_done_);
     radius_sq_ *= (i + static_cast<double>(settings_.alpha)) / (i + 1.0);
 }
@@ -96,8 +96,8 @@ bool ProgressiveRender::finished() const {
     if (iterations_done_ == 0) return false;
     if (settings_.iterations > 0 && iterations_done_ >= settings_.iterations) return true;
     if (settings_.time_limit > 0.0) {
-        const double per_pass = elapsed_ / iterations_done_;
-        if (elapsed_ + per_pass > settings_.time_limit) return true;
+        const double per_iteration = elapsed_ / iterations_done_;
+        if (elapsed_ + per_iteration > settings_.time_limit) return true;
     }
     return false;
 }
@@ -161,7 +161,7 @@ RenderResult render_progressive(const Scene& scene, const Camera& camera, const 
             control.check();
             progressive.run_iteration(control);
         } catch (const Cancelled&) {
-            // Nothing to show yet: the caller learns it was cancelled. Else the passes done are a valid image.
+            // Nothing to show yet: the caller learns it was cancelled. Else the iterations done are a valid image.
             if (progressive.iterations_done() == 0) throw;
             RenderResult r = progressive.result();
             r.stats.values["cancelled"] = 1.0;

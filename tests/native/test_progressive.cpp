@@ -61,13 +61,13 @@ TEST(Progressive, RadiusShrinksAsKnausZwickerAndPassesDiffer) {
     double r2 = 0.04;
     std::vector<float> previous;
     for (int i = 1; i <= 5; ++i) {
-        EXPECT_NEAR(progressive.next_radius(), std::sqrt(r2), 1e-6) << "pass " << i;
+        EXPECT_NEAR(progressive.next_radius(), std::sqrt(r2), 1e-6) << "iteration " << i;
         EXPECT_FALSE(progressive.finished());
         progressive.run_iteration(control);
         EXPECT_NEAR(progressive.radius(), std::sqrt(r2), 1e-6);
         r2 *= (i + 2.0 / 3.0) / (i + 1.0);
         std::vector<float> image = progressive.image();
-        if (!previous.empty()) EXPECT_NE(image, previous) << "pass " << i << " added nothing new";
+        if (!previous.empty()) EXPECT_NE(image, previous) << "iteration " << i << " added nothing new";
         previous = image;
     }
     EXPECT_TRUE(progressive.finished());

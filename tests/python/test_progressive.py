@@ -116,12 +116,12 @@ def test_time_limit_and_cancel_stop_it(cornell):
 
     stages = []
 
-    def cancel_in_pass_three(stage, fraction):  # progress is polled ~10x a second: cancel from pass 3 on
+    def cancel_in_iteration_three(stage, fraction):  # progress is polled ~10x a second: cancel from iteration 3 on
         stages.append(stage)
-        return stage.startswith("pass ") and int(stage.split()[1].split("/")[0]) >= 3
+        return stage.startswith("iteration ") and int(stage.split()[1].split("/")[0]) >= 3
 
     settings = ps.RenderSettings(photons=3000, seed=1, iterations=1000)
-    image, stats = ps.render(cornell, camera, settings, progress=cancel_in_pass_three)
+    image, stats = ps.render(cornell, camera, settings, progress=cancel_in_iteration_three)
     assert stats["values"]["cancelled"] == 1 and stats["values"]["iterations"] >= 2
     assert np.isfinite(image).all() and image[..., :3].max() > 0
     # Cancelled inside the first pass (5M photons: the first poll, after 0.1 s, finds it tracing): nothing to show.
