@@ -316,6 +316,13 @@ def test_refinement_first_image_then_averaged_iterations(caustics_scene, core):
     assert steps[2] < steps[0]
 
 
+def test_viewport_asks_the_film_for_combined_alone(caustics_scene, core):
+    # The viewport shows one image: its progressive sums hold combined only (32 bytes a pixel, test_film.py).
+    render = viewport.refine_settings(core, caustics_scene).render
+    assert core.RenderSettings(**render).outputs == ("combined",)
+    assert not core.RenderSettings(**render).caustics_pass
+
+
 def test_refinement_stops_quickly_when_asked(caustics_scene, core):
     job, frames = refinement_for(core, 96, 96, preview_photons=2_000, photons_per_iteration=2_000_000,
                                  max_iterations=0, time_limit=0.0)

@@ -156,7 +156,8 @@ TEST(KernelCoverage, RendersAreCorrectedButDirectionalBlocksAreNot) {
         settings.boundary_correction = correction;
         RenderControl control;
         double sum = 0.0;
-        for (float v : render(scene, camera, settings, control).film[ps::FilmOutput::indirect]) sum += v;
+        const RenderResult result = render(scene, camera, settings, control);
+        for (float v : result.film[FilmOutput::indirect]) sum += v;
         return sum;
     };
     EXPECT_GT(indirect_sum(SplatMethod::cluster_cone, true), 1.02 * indirect_sum(SplatMethod::cluster_cone, false));
