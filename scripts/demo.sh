@@ -9,11 +9,11 @@ bash "$root/scripts/build.sh"
 out_dir="$root/build/demo"
 mkdir -p "$out_dir"
 rm -f "$out_dir"/cornell_caustics_*.png
-# 16 progressive passes (each with new photons, jittered camera rays and a smaller radius) instead of the
+# 16 progressive iterations (each with new photons, jittered camera rays and a smaller radius) instead of the
 # scene's single pass: 7.5 s of rendering on the 2-core machine, and the glass and the walls come out smooth.
 BLENDER_USER_SCRIPTS="$root/build/blender" blender -b --factory-startup -noaudio --addons photonsplat \
   "$root/blend_scenes/cornell_caustics.blend" -E PHOTONSPLAT \
-  --python-expr "import bpy; bpy.context.scene.photonsplat.passes = 16" \
+  --python-expr "import bpy; bpy.context.scene.photonsplat.iterations = 16" \
   -o "$out_dir/cornell_caustics_###" -F PNG -f 1
 png="$out_dir/cornell_caustics_001.png"
 if [ ! -s "$png" ]; then

@@ -6,7 +6,7 @@
 
 For every --bounces value b it renders the same exported frame with render_reference(max_bounces=b, or
 --reference-bounces; --reference-npy loads a saved one instead and adds SSIM) and with splatting (max_bounces=b,
---photons, each --radii value, 0 = the automatic radius; one-shot, or --passes jittered passes with --alpha 1
+--photons, each --radii value, 0 = the automatic radius; one-shot, or --iterations jittered iterations with --alpha 1
 for a fixed radius and a box filter like the reference's) and prints the mean linear radiance of each,
 splatting split into emission / direct / indirect / caustics. --lights picks which
 light sources stay: all, sun (the world made black) or world (the sun's strength set to 0). The images go to
@@ -53,9 +53,9 @@ def main(argv):
     parser.add_argument("--direct-samples", type=int, default=4)
     parser.add_argument("--no-guide", action="store_true")
     parser.add_argument("--aimed-photons", type=float, default=None, help="default: the core's")
-    parser.add_argument("--passes", type=int, default=1,
-                        help="> 1: progressive passes (jittered pixels: a box filter like the reference's)")
-    parser.add_argument("--alpha", type=float, default=2.0 / 3.0, help="radius shrinking of the passes; 1 = fixed")
+    parser.add_argument("--iterations", "--passes", type=int, default=1,  # --passes: the old name
+                        help="> 1: progressive iterations (jittered pixels: a box filter like the reference's)")
+    parser.add_argument("--alpha", type=float, default=2.0 / 3.0, help="radius shrinking over the iterations; 1 = fixed")
     parser.add_argument("--save", default="")
     args = parser.parse_args(argv)
 
@@ -88,7 +88,7 @@ def main(argv):
         saved[f"reference_b{rb}"] = np.asarray(reference)
         for radius in args.radii:
             s = frame.settings
-            s.method, s.photons, s.radius, s.passes, s.max_bounces = args.method, args.photons, radius, args.passes, b
+            s.method, s.photons, s.radius, s.iterations, s.max_bounces = args.method, args.photons, radius, args.iterations, b
             s.alpha = args.alpha
             if args.aimed_photons is not None:
                 s.aimed_photons = args.aimed_photons

@@ -3,7 +3,7 @@ optionally the error split by component. A measurement program (docs/results/REA
 
     BLENDER_USER_SCRIPTS=build/blender blender -b --factory-startup -noaudio --addons photonsplat \\
         blend_scenes/cornell_caustics.blend --python tools/progressive_diagnosis.py -- \\
-        --reference build/report_384/reference/<key>.npy --width 256 --photons 12500 --passes 8
+        --reference build/report_384/reference/<key>.npy --width 256 --photons 12500 --iterations 8
 
 The reference is a report reference (tools/report.py) of the same scene at a multiple-or-larger resolution,
 area-resampled to --width (exact for box-filtered pixels: a finer reference is a cleaner one). Time is the CPU
@@ -50,7 +50,7 @@ def main(argv):
     parser.add_argument("--photons", type=int, default=12_500)
     parser.add_argument("--radius", type=float, default=0.0)
     parser.add_argument("--aimed-photons", type=float, default=None, help="default: the core's")
-    parser.add_argument("--passes", type=int, default=8)
+    parser.add_argument("--iterations", "--passes", type=int, default=8)  # --passes: the old name
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--method", default="cluster_cone")
     parser.add_argument("--no-boundary-correction", action="store_true",
@@ -68,7 +68,7 @@ def main(argv):
     reference = area_resample(np.load(args.reference), args.width)
 
     s = frame.settings
-    s.method, s.photons, s.radius, s.passes, s.time_limit = args.method, args.photons, args.radius, args.passes, 0.0
+    s.method, s.photons, s.radius, s.iterations, s.time_limit = args.method, args.photons, args.radius, args.iterations, 0.0
     s.caustics_pass = args.split > 0
     s.boundary_correction = not args.no_boundary_correction
     if args.aimed_photons is not None:
