@@ -151,11 +151,13 @@ PYBIND11_MODULE(_core, m) {
     m.def("render", &render, "scene"_a, "camera"_a, "settings"_a = ps::RenderSettings(), "progress"_a = py::none(),
           "passes"_a = false,
           "Renders one frame. Returns (image, stats): image float32 (H, W, 4) linear radiance, row 0 at the top; "
-          "with passes=True also a dict of 'emission', 'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) "
-          "and, with settings.caustics_pass, 'caustics' (H, W, 3). progress(stage, fraction) "
-          "is called about 10× a second on the calling thread; returning True cancels (raises Cancelled). "
-          "settings.iterations != 1 or a time_limit render progressively (the mean of the passes); a cancel after "
-          "the first pass returns the mean so far with stats['values']['cancelled'] = 1.");
+          "with passes=True also a dict of the film outputs settings.outputs asks for beyond combined ('emission', "
+          "'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) by default) and, with "
+          "settings.caustics_pass, 'caustics' (H, W, 3); without it only combined is made. progress(stage, "
+          "fraction) is called about 10× a second on the calling thread; returning True cancels (raises "
+          "Cancelled). settings.iterations != 1 or a time_limit render progressively (the mean of the "
+          "iterations); a cancel after the first iteration returns the mean so far with "
+          "stats['values']['cancelled'] = 1.");
 
     m.def("default_memory_budget", &ps::default_memory_budget,
           "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");

@@ -1,4 +1,4 @@
-// Progressive rendering one pass at a time, for callers that show the image between passes (the viewport,
+// Progressive rendering one iteration at a time, for callers that show the image between iterations (the viewport,
 // F12 in Blender): photonsplat.Progressive(scene, camera, settings), then .step() and .image() as often as wanted.
 // A whole progressive render in one call is render() with settings.iterations / settings.time_limit.
 #include <pybind11/numpy.h>
@@ -21,11 +21,11 @@ using namespace pybind11::literals;
 void bind_progressive(py::module_& m) {
     py::class_<ps::ProgressiveRender>(
         m, "Progressive",
-        "A progressive render advanced one pass at a time. Pass 1 is the one-shot image of render(); every later "
-        "pass traces new photons, jitters the camera rays inside their pixels and shrinks the radius as "
+        "A progressive render advanced one iteration at a time. Iteration 1 is the one-shot image of render(); every "
+        "later iteration traces new photons, jitters the camera rays inside their pixels and shrinks the radius as "
         "r_i^2 = r_(i-1)^2 (i-1+alpha)/i; image() is the running mean. The scene must not be changed while a "
         "Progressive uses it (build a new one instead). Thread-safe: image(), stats() and the properties may be "
-        "read from another thread while step() runs; they then describe the passes completed.")
+        "read from another thread while step() runs; they then describe the iterations completed. Only the film outputs of settings.outputs are averaged.")
         .def(py::init([](const ps::Scene& scene, const ps::Camera& camera, const ps::RenderSettings& settings) {
                  return std::make_unique<ps::ProgressiveRender>(scene, camera, settings);
              }),
@@ -39,8 +39,9 @@ void bind_progressive(py::module_& m) {
                 });
             },
             "progress"_a = py::none(),
-            "Renders one more pass off the GIL and adds it to the mean; returns None. progress(stage, fraction) as "
-            "in render(); returning True cancels the pass (raises Cancelled, the mean keeps the passes before it). "
+            "Renders one more iteration off the GIL and adds it to the mean; returns None. progress(stage, fraction) "
+            "as in render(); returning True cancels the iteration (raises Cancelled, the mean keeps the iterations "
+            "before it). "
             "RuntimeError if another thread is running step() on this object.")
         .def(
             "image",
@@ -50,30 +51,31 @@ void bind_progressive(py::module_& m) {
                 if (rgba.empty()) rgba.assign(static_cast<size_t>(w) * h * 4, 0.0f);
                 return image_array(rgba, h, w, 4);
             },
-            "The running mean: float32 (H, W, 4) linear radiance, row 0 at the top; zeros before the first pass.")
+            "The running mean: float32 (H, W, 4) linear radiance, row 0 at the top; zeros before the first iteration.")
         .def(
             "passes",
             [](const ps::ProgressiveRender& p) {
-                if (p.iterations_done() == 0) throw ps::InvalidInput("passes", "no pass has been rendered yet");
+                if (p.iterations_done() == 0) throw ps::InvalidInput("passes", "no iteration has been rendered yet");
                 return pass_images(p.result());
             },
-            "The mean of each per-pass image, as render(passes=True) gives them ('emission', 'direct', 'indirect', "
-            "'normal', 'depth', and 'caustics' with settings.caustics_pass); normal and depth are of the first "
-            "pass (pixel-centred rays), as Cycles keeps its first sample's.")
+            "The mean of each render pass beyond combined that settings.outputs asks for, as render(passes=True) "
+            "gives them ('emission', 'direct', 'indirect', 'normal', 'depth', and 'caustics' with "
+            "settings.caustics_pass); normal and depth are of the first iteration (pixel-centred rays), as Cycles "
+            "keeps its first sample's.")
         .def("stats", [](const ps::ProgressiveRender& p) { return stats_dict(p.stats()); },
-             "Stats summed over the passes done (seconds, counters), bytes of the last, and values: passes, radius "
-             "(first pass), final_radius, alpha, time_limit, elapsed, and for directional "
-             "directional_exact_passes / directional_exact_from_pass.")
+             "Stats summed over the iterations done (seconds, counters), bytes of the last, and values: iterations, "
+             "radius (first iteration), final_radius, alpha, time_limit, elapsed, and for an approximate method "
+             "exact_iterations / exact_from_iteration (where it gave way to the exact splat).")
         .def_property_readonly("iterations_done", &ps::ProgressiveRender::iterations_done)
         .def_property_readonly("passes_done", &ps::ProgressiveRender::iterations_done, "Deprecated name of iterations_done.")
         .def_property_readonly("radius", &ps::ProgressiveRender::radius,
-                               "Radius of the last pass done (before any pass: of the first).")
+                               "Radius of the last iteration done (before any: of the first).")
         .def_property_readonly("next_radius", &ps::ProgressiveRender::next_radius)
         .def_property_readonly("elapsed", &ps::ProgressiveRender::elapsed,
-                               "Seconds spent choosing the first radius and in completed passes (time between step() calls is not "
+                               "Seconds spent choosing the first radius and in completed iterations (time between step() calls is not "
                                "counted).")
         .def_property_readonly("finished", &ps::ProgressiveRender::finished,
-                               "settings.iterations are done, or the next pass would end past settings.time_limit.");
+                               "settings.iterations are done, or the next iteration would end past settings.time_limit.");
 }
 
 }  // namespace ps_py
