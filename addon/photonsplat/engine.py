@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import export, passes
+from . import compat, export, passes
 
 class CoreUnavailable(Exception):
     """The compiled module (photonsplat._core) is missing or failed to load."""
@@ -217,7 +217,7 @@ def _write_pixels(result, frame, image):
                            f"expected {(frame.height, frame.width, 4)}")
     # The core's row 0 is the top of the image; Blender's is the bottom.
     pixels = np.ascontiguousarray(image[::-1].reshape(-1, 4))
-    result.layers[0].passes["Combined"].rect.foreach_set(pixels)
+    compat.write_pass_pixels(result.layers[0].passes["Combined"], pixels)
 
 
 def _summary(frame, stats, photons):

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import compat
+
 
 @dataclass(frozen=True)
 class RenderPass:
@@ -85,6 +87,6 @@ def write_passes(layer, components, width, height):
         if data.shape != (height, width, channels):
             raise RuntimeError(f"the core's {render_pass.name} pass has shape {data.shape}, "
                                f"expected {(height, width, channels)}")
-        target.rect.foreach_set(np.ascontiguousarray(data[::-1].reshape(-1, channels)))
+        compat.write_pass_pixels(target, np.ascontiguousarray(data[::-1].reshape(-1, channels)))
         written.append(render_pass.name)
     return written

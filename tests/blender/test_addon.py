@@ -7,7 +7,7 @@ from photonsplat import engine, ui
 
 
 def test_engine_is_registered():
-    engines = {cls.bl_idname: cls for cls in bpy.types.RenderEngine.__subclasses__()}
+    engines = {getattr(cls, "bl_idname", None): cls for cls in bpy.types.RenderEngine.__subclasses__()}
     assert "PHOTONSPLAT" in engines
     cls = engines["PHOTONSPLAT"]
     assert cls.bl_label == "Photon Splat"

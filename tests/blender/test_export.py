@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from blender_helpers import uniform_world
-from photonsplat import export
+from photonsplat import compat, export
 from photonsplat.export import materials
 
 
@@ -85,7 +85,10 @@ def node_material(name, shader_type, **inputs):
     nodes.clear()
     shader = nodes.new(shader_type)
     for key, value in inputs.items():
-        shader.inputs[key.replace("_", " ")].default_value = value
+        name = key.replace("_", " ")
+        if shader_type == "ShaderNodeBsdfPrincipled" and key.lower() in compat.PRINCIPLED_INPUTS:
+            name = compat.principled_input(key.lower())       # v1 and v2 name some inputs differently
+        shader.inputs[name].default_value = value
     output = nodes.new("ShaderNodeOutputMaterial")
     mat.node_tree.links.new(shader.outputs[0], output.inputs["Surface"])
     return mat, shader
@@ -103,7 +106,7 @@ def test_principled_maps_to_the_dominant_lobe(empty_scene):
     metal, _ = node_material("M", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.8, 0.3, 1.0), Metallic=1.0,
                              Roughness=0.0)
     plain, _ = node_material("D", "ShaderNodeBsdfPrincipled", Base_Color=(0.2, 0.4, 0.6, 1.0),
-                             Emission=(1.0, 0.5, 0.0, 1.0), Emission_Strength=4.0)
+                             Emission_Color=(1.0, 0.5, 0.0, 1.0), Emission_Strength=4.0)
     g, m, d = (materials.convert_material(x) for x in (glass, metal, plain))
     assert (g.kind, g.ior, g.notes) == ("glass", pytest.approx(1.5), [])
     assert approx(g.color, (0.9, 1.0, 0.9))
@@ -121,8 +124,9 @@ def test_principled_approximations_are_noted(empty_scene):
 
 
 def test_rough_metals_become_glossy_with_their_roughness(empty_scene):
-    gold, _ = node_material("Gold", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0,
-                            Roughness=0.35)
+    gold, node = node_material("Gold", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0,
+                               Roughness=0.35)
+    node.distribution = 'GGX'            # the default of Blender 3.4 (4.0 made it Multiscatter GGX, noted)
     brushed, node = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.3)
     node.distribution = 'GGX'
     polished, _ = node_material("Polished", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.05)

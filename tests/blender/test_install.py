@@ -4,6 +4,7 @@ test comes from the zip only, not from build/blender."""
 
 import os
 import subprocess
+import sys
 import zipfile
 
 import bpy
@@ -14,6 +15,14 @@ from blender_helpers import BLEND_SCENES, REPO
 def addon_zip():
     version = ".".join(str(v) for v in photonsplat.bl_info["version"])
     return REPO / "build" / f"photonsplat-{version}.zip"
+
+
+def blender_command():
+    """The command that runs a Python script in a fresh Blender like this one: the blender program, or, for
+    Blender as a Python module (the bpy wheel), this Python."""
+    if bpy.app.binary_path:
+        return [bpy.app.binary_path, "-b", "--factory-startup", "-noaudio", "--python-exit-code", "1", "--python"]
+    return [sys.executable]
 
 
 def test_zip_holds_the_package_and_the_module():
@@ -30,10 +39,9 @@ def test_zip_installs_with_blenders_installer_and_renders(tmp_path):
     scripts = tmp_path / "user_scripts"
     scripts.mkdir()
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(scripts), TMPDIR=str(tmp_path))
+    arguments = ["--", str(addon_zip()), str(BLEND_SCENES / "cornell_caustics.blend"), str(tmp_path / "out.exr")]
     run = subprocess.run(
-        [bpy.app.binary_path, "-b", "--factory-startup",
-         "-noaudio", "--python-exit-code", "1", "--python", str(REPO / "tests/blender/install_and_render.py"),
-         "--", str(addon_zip()), str(BLEND_SCENES / "cornell_caustics.blend"), str(tmp_path / "out.exr")],
+        [*blender_command(), str(REPO / "tests/blender/install_and_render.py"), *arguments],
         env=env, capture_output=True, text=True, timeout=120)
     log = run.stdout + run.stderr
     assert run.returncode == 0 and "INSTALL_AND_RENDER_OK" in log, log[-3000:]

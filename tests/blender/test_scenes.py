@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from blender_helpers import open_scene, pixel_of, render_pixels
-from photonsplat import engine
+from photonsplat import compat, engine
 
 WIDTH, HEIGHT = 96, 54
 PHOTONS = 20_000
@@ -55,7 +55,7 @@ def test_atrium_is_saved_as_the_benchmark_expects():
     assert 50_000 <= triangles <= 300_000
     kinds = {node.bl_idname for material in bpy.data.materials if material.use_nodes
              for node in material.node_tree.nodes}
-    assert {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass", "ShaderNodeBsdfGlossy"} <= kinds
+    assert {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass", compat.GLOSSY_BSDF_IDNAME} <= kinds
 
 
 def test_atrium_fly_through_renders_every_frame(tmp_path, core):
@@ -85,7 +85,7 @@ def test_glossy_row_renders_five_spheres_in_order(tmp_path, core):
                      key=lambda ob: ob.matrix_world.translation.x)
     roughness = []
     for ob in spheres:
-        glossy = [n for n in ob.active_material.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfGlossy"]
+        glossy = [n for n in ob.active_material.node_tree.nodes if n.bl_idname == compat.GLOSSY_BSDF_IDNAME]
         assert len(glossy) == 1 and glossy[0].distribution == 'GGX'
         roughness.append(round(glossy[0].inputs["Roughness"].default_value, 3))
     assert roughness == [0.05, 0.2, 0.35, 0.5, 0.8]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from blender_helpers import render_pixels, uniform_world, use_photonsplat
-from photonsplat import engine, export
+from photonsplat import compat, engine, export
 
 
 def add_camera(scene, location=(0.0, 0.0, 10.0), rotation=(0.0, 0.0, 0.0), ortho_scale=None):
@@ -118,8 +118,8 @@ def points_grid_with_instances(count_x, count_y):
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=count_x - 1, y_subdivisions=count_y - 1, size=20.0)
     grid = bpy.context.active_object
     tree = bpy.data.node_groups.new("Scatter", "GeometryNodeTree")
-    tree.inputs.new("NodeSocketGeometry", "Geometry")
-    tree.outputs.new("NodeSocketGeometry", "Geometry")
+    compat.new_group_socket(tree, 'INPUT', "NodeSocketGeometry", "Geometry")
+    compat.new_group_socket(tree, 'OUTPUT', "NodeSocketGeometry", "Geometry")
     group_in, group_out = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
     on_points = tree.nodes.new("GeometryNodeInstanceOnPoints")
     sphere = tree.nodes.new("GeometryNodeMeshIcoSphere")

@@ -1,14 +1,16 @@
-"""Blender lights -> the core's lights, converting Cycles 3.4's units into radiometric ones.
+"""Blender lights -> the core's lights, converting Cycles' units into radiometric ones.
 
-The core takes physical quantities; Blender's light settings follow Cycles 3.4's conventions. With colour c and
-Power/Strength P:
-  point  isotropic intensity I = c P / (4 pi)  [W/sr]; radius = Radius (soft shadows)
-  spot   the same intensity on the axis, with Cycles 3.4's falloff I(θ) = I cos θ smoothstep(...) inside the cone
-         of full angle Spot Size, softened by Blend (the core's spot light); radius as for point lights
+The core takes physical quantities; Blender's light settings follow the conventions of the Cycles of the running
+Blender, which compat.py holds (light_color_power, point_intensity, area_radiance...). With colour c and power P
+(Cycles 4.x: times 2^Exposure and the Temperature's blackbody colour):
+  point  isotropic intensity I = c P / (4 pi)  [W/sr]; radius = Radius (soft shadows): 3.4's disc facing the
+         receiver, or in 4.x with Soft Falloff off a true sphere
+  spot   the same intensity on the axis, restricted to the cone of full angle Spot Size and softened by Blend:
+         3.4's profile I(θ) = I cos θ smoothstep(...), 4.x's I(θ) = I smoothstep(...)
   sun    irradiance E = c P  [W/m^2] on a surface facing the sun; travels along the object's local -Z;
          angle = the sun's full angular diameter
-  area   one-sided rectangle emitting radiance L = c P / (4 A)  [W/(sr m^2)] along local -Z, where A is the
-         area including the object's scale (so the flux is pi/4 P, as in Cycles 3.4, not P).
+  area   one-sided rectangle emitting radiance along local -Z: L = c P / (4 A) in 3.4 (flux pi/4 P),
+         L = c P / (pi A) in 4.x (flux P), where A is the area including the object's scale.
          Disk and ellipse lights are native ellipses: A = π/4 size_x size_y (scale included), as in Cycles.
 """
 
@@ -16,28 +18,31 @@ import math
 
 from mathutils import Matrix, Vector
 
+from .. import compat
 from . import materials
 
 
 def export_light(core_scene, name, light, matrix, notes):
     """Add `light` (bpy.types.Light, evaluated) placed by `matrix` (world matrix, a copy) to `core_scene`.
     Returns False when the light was skipped."""
-    color = _emitted_color(light, notes)
-    power = float(light.energy)
-    rgb = tuple(c * power for c in color)
+    tint = _node_tint(light, notes)
+    rgb = tuple(c * t for c, t in zip(compat.light_color_power(light), tint))
 
     if light.type == 'SPOT':
-        # Cycles 3.4 ignores the object's scale for the cone (it reads only the direction).
+        # Cycles 3.4 ignores the object's scale for the cone (it reads only the direction); 4.x squeezes the
+        # cone by a non-uniform scale, which the core's round cone cannot follow.
         direction = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
+        if compat.spot_cone_follows_scale() and _non_uniform(matrix):
+            notes.append(f"Light '{name}': non-uniform scale ignored (the spot's cone is rendered round)")
         core_scene.add_spot_light(name=name, position=tuple(matrix.translation), direction=tuple(direction),
-                                  intensity=tuple(c / (4.0 * math.pi) for c in rgb),
+                                  intensity=compat.point_intensity(light, rgb),
                                   spot_size=float(light.spot_size), spot_blend=float(light.spot_blend),
-                                  radius=float(light.shadow_soft_size))
+                                  radius=float(light.shadow_soft_size), **compat.point_light_shape(light))
         return True
     if light.type == 'POINT':
         core_scene.add_point_light(name=name, position=tuple(matrix.translation),
-                                   intensity=tuple(c / (4.0 * math.pi) for c in rgb),
-                                   radius=float(light.shadow_soft_size))
+                                   intensity=compat.point_intensity(light, rgb),
+                                   radius=float(light.shadow_soft_size), **compat.point_light_shape(light))
         return True
     if light.type == 'SUN':
         direction = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
@@ -71,28 +76,34 @@ def _export_area_light(core_scene, name, light, matrix, rgb, notes):
     if axis_u.cross(axis_v).dot(facing) < 0.0:
         axis_u, axis_v = axis_v, axis_u
     core_scene.add_area_light(name=name, center=tuple(matrix.translation), axis_u=tuple(axis_u),
-                              axis_v=tuple(axis_v), radiance=tuple(c / (4.0 * area) for c in rgb),
+                              axis_v=tuple(axis_v), radiance=compat.area_radiance(light, rgb, area),
                               shape="ellipse" if round_shape else "rectangle")
     return True
 
 
-def _emitted_color(light, notes):
-    """Light colour times the Emission node of its node tree, if it uses one (Cycles multiplies them)."""
-    color = tuple(float(c) for c in light.color)
+def _non_uniform(matrix):
+    scale = matrix.to_scale()
+    return max(abs(scale.x), abs(scale.y)) > 1.0001 * min(abs(scale.x), abs(scale.y))
+
+
+def _node_tint(light, notes):
+    """The colour × strength of the Emission node of the light's node tree, if it uses one (Cycles multiplies
+    the light's own colour and power by it); white without one."""
+    white = (1.0, 1.0, 1.0)
     if not light.use_nodes or light.node_tree is None:
-        return color
+        return white
     output = light.node_tree.get_output_node('CYCLES')
     node = materials.source_node(output.inputs["Surface"]) if output is not None else None
     if node is None:
         return (0.0, 0.0, 0.0)           # Cycles: a light whose node tree outputs nothing emits nothing
     if node.bl_idname != "ShaderNodeEmission":
         notes.append(f"Light '{light.name}': node '{node.bl_label}' in its node tree ignored")
-        return color
+        return white
     found = []
     tint = materials.color_input(node, "Color", found)
     strength = materials.float_input(node, "Strength", found)
     notes.extend(f"Light '{light.name}': {n}" for n in found)
-    return tuple(c * t * strength for c, t in zip(color, tint))
+    return tuple(t * strength for t in tint)
 
 
 def conversion_notes(light):

@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import compat
 from . import textures
 
 # Above this roughness a glossy or glass surface visibly blurs in Cycles: a metal becomes "glossy" (the core's
@@ -156,15 +157,18 @@ def _convert_shader(node, name):
 
 
 def _principled(node, name):
+    """Principled BSDF, v1 (Blender 3.x) or v2 (4.0 and later): compat.principled_input names its inputs."""
     notes = []
-    base, texture = color_or_texture(node, "Base Color", notes)
-    metallic = _clamp01(float_input(node, "Metallic", notes))
-    transmission = _clamp01(float_input(node, "Transmission", notes))
-    roughness = float_input(node, "Roughness", notes)
-    ior = float_input(node, "IOR", notes)
-    emission = _scaled(color_input(node, "Emission", notes), float_input(node, "Emission Strength", notes))
+    role = compat.principled_input
+    base, texture = color_or_texture(node, role("base_color"), notes)
+    metallic = _clamp01(float_input(node, role("metallic"), notes))
+    transmission = _clamp01(float_input(node, role("transmission"), notes))
+    roughness = float_input(node, role("roughness"), notes)
+    ior = float_input(node, role("ior"), notes)
+    emission = _scaled(color_input(node, role("emission_color"), notes),
+                       float_input(node, role("emission_strength"), notes))
 
-    # Cycles 3.4 weights: metal = metallic, glass = transmission * (1 - metallic),
+    # Cycles' weights (3.4 and 4.x alike): metal = metallic, glass = transmission * (1 - metallic),
     # diffuse = (1 - metallic)(1 - transmission). We keep the dominant lobe; metal wins ties like in Cycles.
     if metallic >= 0.5:
         spec = _metal(name, base, roughness)
@@ -172,29 +176,36 @@ def _principled(node, name):
             notes.append(f"Metallic {metallic:.2f} rendered as a pure metal")
         if spec.kind == "glossy":
             _note_distribution(notes, getattr(node, "distribution", "GGX"))
+        if role("specular_ior_level") is not None and _is_tinted(color_input(node, role("specular_tint"), [])):
+            # v2's metal is an F82-tint Fresnel; with a white tint it is Schlick's with F0 = Base Color, ours.
+            notes.append("Specular Tint of the metal ignored (F82 edge tint rendered white)")
     elif transmission >= 0.5:
         spec = MaterialSpec(name=name, kind="glass", color=base, ior=ior)
         if transmission < 1.0 or metallic > 0.0:
             notes.append(f"Transmission {transmission:.2f} rendered as pure glass")
         _note_rough(notes, roughness)
     else:
-        subsurface = _clamp01(float_input(node, "Subsurface", notes))
+        subsurface = _clamp01(float_input(node, role("subsurface"), notes))
         color = base
         if subsurface > 0.0:
-            # Cycles' subsurface albedo blends towards Subsurface Color; diffuse with that colour is close.
-            color = _mix(base, color_input(node, "Subsurface Color", notes), subsurface)
+            if role("subsurface_color") is not None:
+                # v1: Cycles' subsurface albedo blends towards Subsurface Color; diffuse with that colour is
+                # close. v2 scatters Base Color itself.
+                color = _mix(base, color_input(node, role("subsurface_color"), notes), subsurface)
             notes.append("subsurface scattering rendered as diffuse")
         spec = MaterialSpec(name=name, kind="diffuse", color=color)
         if metallic > 0.0 or transmission > 0.0:
             notes.append(f"Metallic {metallic:.2f} / Transmission {transmission:.2f} ignored (rendered diffuse)")
 
-    if float_input(node, "Alpha", notes) < 1.0:
+    if float_input(node, role("alpha"), notes) < 1.0:
         notes.append("Alpha ignored (rendered opaque)")
-    if float_input(node, "Clearcoat", notes) > 0.0:
+    if float_input(node, role("coat"), notes) > 0.0:
         notes.append("clearcoat ignored")
-    if float_input(node, "Sheen", notes) > 0.0:
+    if float_input(node, role("sheen"), notes) > 0.0:
         notes.append("sheen ignored")
-    if node.inputs["Normal"].is_linked:
+    if role("thin_film") is not None and float_input(node, role("thin_film"), notes) > 0.0:
+        notes.append("thin film ignored")
+    if node.inputs[role("normal")].is_linked:
         notes.append("normal/bump map ignored")
     spec.emission = emission
     spec.texture = texture if spec.color == base else None
@@ -202,6 +213,10 @@ def _principled(node, name):
         notes.append(f"image '{texture.image.name}' ignored (its colour is blended with Subsurface Color)")
     spec.notes = notes
     return spec
+
+
+def _is_tinted(rgb):
+    return any(abs(c - 1.0) > 1e-6 for c in rgb)
 
 
 def _diffuse(node, name):
@@ -238,6 +253,10 @@ def _glossy(node, name):
         spec = _metal(name, color, roughness)
     if spec.kind == "glossy":
         _note_distribution(notes, distribution)
+    # Blender 3.4's Anisotropic BSDF and 4.x's Glossy BSDF (one node since 4.0) have an Anisotropy input.
+    if "Anisotropy" in node.inputs and (node.inputs["Anisotropy"].is_linked
+                                        or float_input(node, "Anisotropy", notes) != 0.0):
+        notes.append("anisotropy ignored")
     return _finish_node(spec, node, texture, notes)
 
 
@@ -251,7 +270,6 @@ def _glass(node, name):
 
 # Nodes converted as a kin of theirs, and what that leaves out.
 _KIN_NOTES = {
-    "ShaderNodeBsdfAnisotropic": "anisotropy ignored",
     "ShaderNodeBsdfRefraction": "Refraction BSDF rendered as glass (with Fresnel reflection)",
 }
 

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import compat
+
 # Geometry we cannot render yet: skipped with a note (other non-mesh types, e.g. empties, have no surface).
 UNSUPPORTED_TYPES = {'CURVES', 'POINTCLOUD', 'VOLUME', 'GPENCIL'}
 
@@ -65,7 +67,7 @@ def _from_mesh(mesh):
 
     # Split normals honour flat/smooth shading, auto smooth and custom normals, exactly what Cycles shades
     # with. In Blender 3.4 they must be computed explicitly first.
-    mesh.calc_normals_split()
+    compat.prepare_corner_normals(mesh)
     normals = np.empty(count * 9, dtype=np.float32)
     mesh.loop_triangles.foreach_get("split_normals", normals)
 

@@ -1,0 +1,149 @@
+"""Every difference between the Blender versions the add-on supports, in one place.
+
+Supported: 3.4 (Debian 12's Blender), 4.5 LTS and 5.0 (blender.org, and the `bpy` wheels the tests use). The
+rest of the add-on asks this module instead of testing bpy.app.version itself, so that a new Blender version
+is one edit here. Each entry says which version changed what.
+"""
+
+import bpy
+
+VERSION = bpy.app.version
+
+
+def prepare_corner_normals(mesh):
+    """Make loop_triangles' split_normals valid. Blender 3.4 computes them on request only
+    (Mesh.calc_normals_split, removed in 4.1, where corner normals are always up to date)."""
+    calc = getattr(mesh, "calc_normals_split", None)
+    if calc is not None:
+        calc()
+
+
+# --- render results -------------------------------------------------------------------------------------------
+
+# RenderPass.rect: Blender 3.4 takes foreach_set as one row of `channels` floats per pixel; 4.x and 5.x take
+# one flat run of floats (len(rect) is the pixel count in both).
+_FLAT_PASS_RECT = VERSION >= (4, 0, 0)
+
+
+def write_pass_pixels(render_pass, pixels):
+    """Fill `render_pass` from `pixels`, a C-contiguous float32 (pixel count, channels) array."""
+    render_pass.rect.foreach_set(pixels.reshape(-1) if _FLAT_PASS_RECT else pixels)
+
+
+# --- Principled BSDF ------------------------------------------------------------------------------------------
+
+# Principled BSDF v2 (Blender 4.0) renamed or replaced the inputs of v1 (3.x). The export reads them by role;
+# roles a version does not have are None there. v1's Subsurface Color is gone in v2 (subsurface uses Base
+# Color); v2's Specular IOR Level, Coat Tint and Thin Film have no v1 counterpart.
+PRINCIPLED_V2 = VERSION >= (4, 0, 0)
+_PRINCIPLED_V1 = {
+    "base_color": "Base Color", "metallic": "Metallic", "roughness": "Roughness", "ior": "IOR",
+    "alpha": "Alpha", "normal": "Normal", "transmission": "Transmission",
+    "subsurface": "Subsurface", "subsurface_color": "Subsurface Color",
+    "specular": "Specular", "specular_tint": "Specular Tint", "anisotropic": "Anisotropic",
+    "coat": "Clearcoat", "coat_roughness": "Clearcoat Roughness",
+    "sheen": "Sheen", "sheen_tint": "Sheen Tint",
+    "emission_color": "Emission", "emission_strength": "Emission Strength",
+    "transmission_roughness": "Transmission Roughness",
+    "specular_ior_level": None, "coat_tint": None, "thin_film": None,
+}
+_PRINCIPLED_V2 = {
+    **_PRINCIPLED_V1,
+    "transmission": "Transmission Weight", "subsurface": "Subsurface Weight", "subsurface_color": None,
+    "specular": None, "specular_ior_level": "Specular IOR Level", "anisotropic": "Anisotropic",
+    "coat": "Coat Weight", "coat_roughness": "Coat Roughness", "coat_tint": "Coat Tint",
+    "sheen": "Sheen Weight", "sheen_tint": "Sheen Tint",
+    "emission_color": "Emission Color", "transmission_roughness": None, "thin_film": "Thin Film Thickness",
+}
+PRINCIPLED_INPUTS = _PRINCIPLED_V2 if PRINCIPLED_V2 else _PRINCIPLED_V1
+
+
+def principled_input(role):
+    """The name of the Principled BSDF input playing `role` in this Blender, or None where it has none."""
+    return PRINCIPLED_INPUTS[role]
+
+
+# --- shader nodes ---------------------------------------------------------------------------------------------
+
+# Blender 4.0 merged Anisotropic BSDF into Glossy BSDF: nodes.new("ShaderNodeBsdfGlossy") makes a node whose
+# bl_idname is ShaderNodeBsdfAnisotropic, and files from 3.x load that way. The default distribution of Glossy
+# and Principled became Multiscatter GGX at the same time (GGX before).
+GLOSSY_BSDF_IDNAME = "ShaderNodeBsdfAnisotropic" if VERSION >= (4, 0, 0) else "ShaderNodeBsdfGlossy"
+
+
+# --- node groups ----------------------------------------------------------------------------------------------
+
+def new_group_socket(tree, in_out, socket_type, name):
+    """Add an input ('INPUT') or output ('OUTPUT') socket to the node group `tree`: Blender 4.0 replaced
+    tree.inputs / tree.outputs by tree.interface."""
+    interface = getattr(tree, "interface", None)
+    if interface is not None:
+        return interface.new_socket(name, in_out=in_out, socket_type=socket_type)
+    return (tree.inputs if in_out == 'INPUT' else tree.outputs).new(socket_type, name)
+
+
+# --- lights ---------------------------------------------------------------------------------------------------
+
+# How Cycles reads a light's settings, measured per version with tools/cycles_light_units.py (figures in
+# docs/blender-versions.md). Cycles 4.0 changed three things:
+#   - an area light's radiance is P / (π A) (flux P), where 3.4 gave P / (4 A) (flux π P / 4);
+#   - a spot's intensity is I · smoothstep(...) across the cone, without 3.4's extra cos θ;
+#   - a point or spot light of radius R with Soft Falloff off is a true sphere (on, the default, it is 3.4's
+#     disc facing the receiver).
+# and added settings that scale the light: Exposure (× 2^exposure), Temperature (× its blackbody colour) and
+# Normalize (off: the strength is not divided by the light's area, so it is radiance-like).
+CYCLES_4_LIGHTS = VERSION >= (4, 0, 0)
+SPOT_COSINE = not CYCLES_4_LIGHTS
+
+
+def light_color_power(light):
+    """(r, g, b) colour × power as Cycles multiplies them (W; W/m² for a sun), before any unit conversion."""
+    power = float(light.energy)
+    color = [float(c) for c in light.color]
+    if CYCLES_4_LIGHTS:
+        power *= 2.0 ** float(light.exposure)
+        if light.use_temperature:
+            color = [c * float(t) for c, t in zip(color, light.temperature_color)]
+    return tuple(c * power for c in color)
+
+
+def _normalized(light):
+    return not CYCLES_4_LIGHTS or light.normalize
+
+
+def point_intensity(light, rgb):
+    """Intensity (W/sr) of a point or spot light of colour × power `rgb`: P / (4π). Without Normalize (4.x)
+    the strength is the radiance-like P / (4π) per unit of the light's disc area π R² instead."""
+    import math
+    scale = 1.0 / (4.0 * math.pi)
+    radius = float(light.shadow_soft_size)
+    if not _normalized(light) and radius > 0.0:
+        scale *= math.pi * radius * radius
+    return tuple(c * scale for c in rgb)
+
+
+def point_light_shape(light):
+    """Keyword arguments of the core's add_point_light / add_spot_light beyond 3.4's, for this light:
+    sphere=True where Cycles renders it as a sphere (4.x, Soft Falloff off), spot_cosine=False for a 4.x spot.
+    Empty for 3.4's conventions (the core's defaults)."""
+    shape = {}
+    if CYCLES_4_LIGHTS and not light.use_soft_falloff and float(light.shadow_soft_size) > 0.0:
+        shape["sphere"] = True
+    if light.type == 'SPOT' and not SPOT_COSINE:
+        shape["spot_cosine"] = False
+    return shape
+
+
+def area_radiance(light, rgb, area):
+    """Radiance (W/(sr m²)) of an area light of colour × power `rgb` and surface `area` (m², scale included)."""
+    import math
+    if not CYCLES_4_LIGHTS:
+        return tuple(c / (4.0 * area) for c in rgb)
+    divisor = math.pi * (area if light.normalize else 1.0)
+    return tuple(c / divisor for c in rgb)
+
+
+def spot_cone_follows_scale():
+    """Whether a non-uniform object scale squeezes a spot's cone into an ellipse (Cycles 4.x); 3.4 reads only
+    the direction."""
+    return CYCLES_4_LIGHTS
