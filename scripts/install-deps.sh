@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config
   libembree-dev libtbb-dev libglm-dev
   libopenimageio-dev openimageio-tools
-  pybind11-dev python3-dev python3-numpy python3-pytest python3-skimage python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-skimage python3-matplotlib python3-venv
   libgtest-dev
   clang libclang-rt-14-dev llvm
   blender

@@ -9,7 +9,7 @@ its id to their COMPAT_ENGINES, the way Cycles does it.
 import bpy
 from bpy.types import Panel
 
-from . import engine
+from . import compat, engine
 from .export import lights, materials, world
 
 ENGINE_ID = engine.PhotonSplatRenderEngine.bl_idname
@@ -186,8 +186,9 @@ class DATA_PT_photonsplat_light(DataBlockPanel, Panel):
 
 def _draw_surface_nodes(layout, id_block, fallback_property):
     """The Surface input of a material's or world's Cycles output node, as Cycles' own panels show it."""
-    layout.prop(id_block, "use_nodes", icon='NODETREE')
-    if id_block.use_nodes and id_block.node_tree is not None:
+    if compat.has_use_nodes_switch(id_block):
+        layout.prop(id_block, "use_nodes", icon='NODETREE')
+    if compat.uses_nodes(id_block):
         output = id_block.node_tree.get_output_node('CYCLES')
         if output is not None:
             layout.template_node_view(id_block.node_tree, output, output.inputs["Surface"])

@@ -7,8 +7,8 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import open_scene, read_exr, render_pixels, use_photonsplat
-from photonsplat import engine
+from blender_helpers import open_scene, read_exr, render_pixels, uniform_world, use_photonsplat
+from photonsplat import compat, engine
 from photonsplat.passes import PASSES
 
 ALL_PASSES = ["Combined", "Depth", "Normal", "Emit", "Direct", "Indirect", "Caustics"]
@@ -26,7 +26,7 @@ def render_multilayer(path):
     scene = bpy.context.scene
     scene.render.filepath = str(path)
     scene.render.use_file_extension = False
-    scene.render.image_settings.file_format = 'OPEN_EXR_MULTILAYER'
+    compat.set_multilayer_exr(scene.render.image_settings)
     scene.render.image_settings.color_depth = '32'
     bpy.ops.render.render(write_still=True)
     assert engine.last_outcome.status == "finished", engine.last_outcome.message
@@ -131,8 +131,7 @@ def test_film_transparency_clears_only_where_rays_escape(empty_scene, tmp_path, 
     bpy.context.object.data.energy = 200.0
     bpy.ops.object.camera_add(location=(0.0, 0.0, 4.0))
     scene.camera = bpy.context.object
-    scene.world = bpy.data.worlds.new("World")
-    scene.world.color = (0.5, 0.5, 0.5)
+    uniform_world(scene, (0.5, 0.5, 0.5))
     use_photonsplat(scene, 48, 10_000)
     opaque = render_pixels(tmp_path / "opaque.exr")
     scene.render.film_transparent = True

@@ -90,7 +90,7 @@ def _node_tint(light, notes):
     """The colour × strength of the Emission node of the light's node tree, if it uses one (Cycles multiplies
     the light's own colour and power by it); white without one."""
     white = (1.0, 1.0, 1.0)
-    if not light.use_nodes or light.node_tree is None:
+    if not compat.uses_nodes(light):
         return white
     output = light.node_tree.get_output_node('CYCLES')
     node = materials.source_node(output.inputs["Surface"]) if output is not None else None

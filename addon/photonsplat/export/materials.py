@@ -107,7 +107,7 @@ def convert_material(material):
         return default_material()
     name = material.name_full
 
-    if not material.use_nodes or material.node_tree is None:
+    if not compat.uses_nodes(material):
         # Without nodes Cycles shades the material as a diffuse surface of its viewport colour.
         spec = MaterialSpec(name=name, color=_color(material.diffuse_color))
         return _finish(spec)

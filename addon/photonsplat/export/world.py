@@ -3,6 +3,7 @@
 Environment textures and sky models are not supported yet: their unconnected colour is used and a note says so.
 """
 
+from .. import compat
 from . import materials
 
 
@@ -10,7 +11,7 @@ def background_radiance(world, notes):
     """Radiance (r, g, b) seen by rays that leave the scene. `notes` collects approximation warnings."""
     if world is None:
         return (0.0, 0.0, 0.0)          # no world: Cycles renders a black background
-    if not world.use_nodes or world.node_tree is None:
+    if not compat.uses_nodes(world):
         return tuple(float(c) for c in world.color)
 
     output = world.node_tree.get_output_node('CYCLES')
