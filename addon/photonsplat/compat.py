@@ -45,7 +45,7 @@ _PRINCIPLED_V1 = {
     "sheen": "Sheen", "sheen_tint": "Sheen Tint",
     "emission_color": "Emission", "emission_strength": "Emission Strength",
     "transmission_roughness": "Transmission Roughness",
-    "specular_ior_level": None, "coat_tint": None, "thin_film": None,
+    "specular_ior_level": None, "coat_tint": None, "thin_film": None, "diffuse_roughness": None,
 }
 _PRINCIPLED_V2 = {
     **_PRINCIPLED_V1,
@@ -54,6 +54,7 @@ _PRINCIPLED_V2 = {
     "coat": "Coat Weight", "coat_roughness": "Coat Roughness", "coat_tint": "Coat Tint",
     "sheen": "Sheen Weight", "sheen_tint": "Sheen Tint",
     "emission_color": "Emission Color", "transmission_roughness": None, "thin_film": "Thin Film Thickness",
+    "diffuse_roughness": "Diffuse Roughness",            # 4.3 and later
 }
 PRINCIPLED_INPUTS = _PRINCIPLED_V2 if PRINCIPLED_V2 else _PRINCIPLED_V1
 

@@ -430,3 +430,34 @@ def test_collection_instances_are_exported_with_their_own_transforms(empty_scene
     meshes = export_current().scene.meshes
     assert sorted(m["transform"][0, 3] for m in meshes) == pytest.approx([-3.0, 3.0])
     assert all(len(m["triangles"]) == 12 for m in meshes)
+
+
+def test_principled_inputs_of_this_blender_are_read(empty_scene):
+    """Principled v1 (3.x) and v2 (4.0+) name inputs differently; the export reads the running version's."""
+    coat, node = node_material("Coated", "ShaderNodeBsdfPrincipled", Base_Color=(0.2, 0.3, 0.4, 1.0),
+                               Subsurface=0.5, Coat=0.5, Sheen=0.5)
+    spec = materials.convert_material(coat)
+    assert spec.kind == "diffuse"
+    assert any(compat.principled_input("coat") in n for n in spec.notes)
+    assert any(compat.principled_input("sheen") in n for n in spec.notes)
+    assert any("subsurface" in n for n in spec.notes)
+    if compat.principled_input("subsurface_color") is None:   # v2: subsurface scatters Base Color itself
+        assert approx(spec.color, (0.2, 0.3, 0.4))
+
+
+@pytest.mark.skipif(bpy.app.version < (4, 3, 0), reason="the Metallic BSDF node came with Blender 4.3")
+def test_metallic_bsdf_is_a_metal(empty_scene):
+    f82, node = node_material("F82", "ShaderNodeBsdfMetallic", Base_Color=(0.9, 0.6, 0.3, 1.0), Roughness=0.3,
+                              Edge_Tint=(1.0, 1.0, 1.0, 1.0))
+    node.distribution = 'GGX'
+    spec = materials.convert_material(f82)
+    assert spec.kind == "glossy" and approx(spec.color, (0.9, 0.6, 0.3)) and spec.notes == []
+    conductor, node = node_material("Gold", "ShaderNodeBsdfMetallic", Roughness=0.0)
+    node.fresnel_type = 'PHYSICAL_CONDUCTOR'
+    node.inputs["IOR"].default_value = (0.18, 0.42, 1.37)
+    node.inputs["Extinction"].default_value = (3.42, 2.35, 1.77)
+    spec = materials.convert_material(conductor)
+    expected = tuple(((n - 1) ** 2 + k * k) / ((n + 1) ** 2 + k * k)
+                     for n, k in zip((0.18, 0.42, 1.37), (3.42, 2.35, 1.77)))
+    assert spec.kind == "mirror" and approx(spec.color, expected, rel=1e-4)
+    assert any("conductor" in n for n in spec.notes)

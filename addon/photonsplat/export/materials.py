@@ -200,10 +200,12 @@ def _principled(node, name):
     if float_input(node, role("alpha"), notes) < 1.0:
         notes.append("Alpha ignored (rendered opaque)")
     if float_input(node, role("coat"), notes) > 0.0:
-        notes.append("clearcoat ignored")
+        notes.append(f"{role('coat')} ignored (no coat layer)")
     if float_input(node, role("sheen"), notes) > 0.0:
-        notes.append("sheen ignored")
-    if role("thin_film") is not None and float_input(node, role("thin_film"), notes) > 0.0:
+        notes.append(f"{role('sheen')} ignored (no sheen layer)")
+    if _optional_float(node, role("diffuse_roughness"), notes) > 0.0:
+        notes.append("Diffuse Roughness ignored (rendered Lambertian)")
+    if _optional_float(node, role("thin_film"), notes) > 0.0:
         notes.append("thin film ignored")
     if node.inputs[role("normal")].is_linked:
         notes.append("normal/bump map ignored")
@@ -213,6 +215,13 @@ def _principled(node, name):
         notes.append(f"image '{texture.image.name}' ignored (its colour is blended with Subsurface Color)")
     spec.notes = notes
     return spec
+
+
+def _optional_float(node, socket_name, notes):
+    """A number input that only some versions have (socket_name None, or missing from this node): 0 there."""
+    if socket_name is None or socket_name not in node.inputs:
+        return 0.0
+    return float_input(node, socket_name, notes)
 
 
 def _is_tinted(rgb):
@@ -256,6 +265,30 @@ def _glossy(node, name):
     # Blender 3.4's Anisotropic BSDF and 4.x's Glossy BSDF (one node since 4.0) have an Anisotropy input.
     if "Anisotropy" in node.inputs and (node.inputs["Anisotropy"].is_linked
                                         or float_input(node, "Anisotropy", notes) != 0.0):
+        notes.append("anisotropy ignored")
+    return _finish_node(spec, node, texture, notes)
+
+
+def _metallic(node, name):
+    """Metallic BSDF (Blender 4.3 and later): a metal whose Fresnel is F82-tint (Base Color at normal
+    incidence, Edge Tint near grazing) or a physical conductor (complex IOR n + ik per channel). The core's
+    metal is Schlick's Fresnel from the normal-incidence colour: exact for F82 with a white Edge Tint."""
+    notes = []
+    roughness = float_input(node, "Roughness", notes)
+    if getattr(node, "fresnel_type", "F82") == "PHYSICAL_CONDUCTOR":
+        n = _color(_input_value(node, "IOR", notes))
+        k = _color(_input_value(node, "Extinction", notes))
+        color = tuple(((a - 1.0) ** 2 + b * b) / ((a + 1.0) ** 2 + b * b) for a, b in zip(n, k))
+        texture = None
+        notes.append("conductor Fresnel rendered as Schlick's from its normal-incidence reflectance")
+    else:
+        color, texture = color_or_texture(node, "Base Color", notes)
+        if _is_tinted(color_input(node, "Edge Tint", [])):
+            notes.append("Edge Tint ignored (F82 edge rendered white)")
+    spec = _metal(name, color, roughness)
+    if spec.kind == "glossy":
+        _note_distribution(notes, getattr(node, "distribution", "GGX"))
+    if node.inputs["Anisotropy"].is_linked or float_input(node, "Anisotropy", notes) != 0.0:
         notes.append("anisotropy ignored")
     return _finish_node(spec, node, texture, notes)
 
@@ -365,6 +398,7 @@ _SHADERS = {
     "ShaderNodeBsdfDiffuse": _diffuse,
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
+    "ShaderNodeBsdfMetallic": _metallic,      # Blender 4.3 and later
     "ShaderNodeBsdfGlass": _glass,
     "ShaderNodeBsdfRefraction": _glass,
     "ShaderNodeBsdfTransparent": _transparent,
