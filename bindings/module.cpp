@@ -87,14 +87,19 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,
-               float radius) {
+               float radius, bool sphere) {
                 LightReader l(ps::LightKind::point, name);
                 const glm::dvec3 p = l.position(position, "position");
                 l.light.value = l.vector(intensity, "intensity");
                 l.light.radius = radius;
+                l.light.sphere = sphere;
                 s.add_light(l.light, p);
             },
-            "name"_a, "position"_a, "intensity"_a, "radius"_a = 0.0f, "Isotropic point light; intensity in W/sr.")
+            "name"_a, "position"_a, "intensity"_a, "radius"_a = 0.0f, "sphere"_a = false,
+            "Isotropic point light; intensity in W/sr. radius > 0 gives it a size, of radiance I/(pi radius^2): "
+            "sphere=False lights as a disc of that radius facing each receiver (Cycles 3.4, and Cycles 4.x with "
+            "Soft Falloff on); sphere=True as a true sphere (Cycles 4.x with Soft Falloff off), which gives more "
+            "light than the disc near it (d not much larger than radius) and the same far away.")
         .def(
             "add_sun_light",
             [](ps::Scene& s, const std::string& name, const py::object& direction, const py::object& irradiance,

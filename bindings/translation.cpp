@@ -155,7 +155,8 @@ void bind_translation(py::module_& m) {
         .def(
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,
-               const py::object& intensity, float spot_size, float spot_blend, float radius) {
+               const py::object& intensity, float spot_size, float spot_blend, float radius, bool sphere,
+               bool spot_cosine) {
                 LightReader l(ps::LightKind::spot, name);
                 const glm::dvec3 p = l.position(position, "position");
                 l.light.direction = l.vector(direction, "direction");
@@ -163,12 +164,17 @@ void bind_translation(py::module_& m) {
                 l.light.spot_size = spot_size;
                 l.light.spot_blend = spot_blend;
                 l.light.radius = radius;
+                l.light.sphere = sphere;
+                l.light.spot_cosine = spot_cosine;
                 s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
-            "radius"_a = 0.0f,
+            "radius"_a = 0.0f, "sphere"_a = false, "spot_cosine"_a = true,
             "Spot light: intensity (W/sr) on its axis `direction`, full cone angle spot_size (radians), edge "
-            "blend in [0, 1]; Cycles 3.4's cos θ · smoothstep falloff.")
+            "blend in [0, 1]. spot_cosine=True: Cycles 3.4's falloff cos θ · smoothstep; False: Cycles 4.x's "
+            "smoothstep alone (no cos θ, so 1/cos θ brighter off the axis). radius and sphere as add_point_light's: "
+            "sphere=False a disc facing the receiver (Cycles 3.4, and 4.x with Soft Falloff on), True a true "
+            "sphere (Cycles 4.x with Soft Falloff off) whose cone attenuates each ray along its own direction.")
         .def_property_readonly("mesh_count", [](const ps::Scene& s) { return s.meshes().size(); })
         .def_property_readonly("instance_count", [](const ps::Scene& s) { return s.instances().size(); })
         .def_property_readonly("texture_count", [](const ps::Scene& s) { return s.textures().size(); })

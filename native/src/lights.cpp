@@ -41,10 +41,13 @@ float spot_smoothstep(float cos_theta, float cos_half_angle, float blend) {
     return 1.0f;
 }
 
-// ∫ over the cone of cos θ · smoothstep dω / (2π) = ∫_{cos α}^{1} μ S(μ) dμ, in closed form: the smoothstep part
-// (width s above cos α) integrates to s (cos α / 2 + 0.35 s), the rest of the cone to (1 − (cos α + s)²) / 2.
-float spot_cone_integral(float cos_half_angle, float blend) {
+// ∫ over the cone of the falloff dω / (2π) = ∫_{cos α}^{1} [μ] S(μ) dμ in closed form, with the smoothstep part
+// of width s above cos α. Cycles 3.4's μ S(μ): the smoothstep part integrates to s (cos α / 2 + 0.35 s), the rest
+// of the cone to (1 − (cos α + s)²) / 2. Cycles 4.x's S(μ) alone: s / 2 (a smoothstep averages 1/2), plus
+// 1 − (cos α + s).
+float spot_cone_integral(float cos_half_angle, float blend, bool cosine) {
     const float c = cos_half_angle, s = (1.0f - c) * blend;
+    if (!cosine) return 1.0f - c - 0.5f * s;
     return s * (0.5f * c + 0.35f * s) + 0.5f * (1.0f - (c + s) * (c + s));
 }
 
@@ -52,11 +55,17 @@ float spot_cone_integral(float cos_half_angle, float blend) {
 
 float Light::spot_attenuation(const glm::vec3& outgoing) const {
     const float cos_theta = glm::dot(glm::normalize(direction), outgoing);
-    return cos_theta * spot_smoothstep(cos_theta, std::cos(0.5f * spot_size), spot_blend);
+    const float edge = spot_smoothstep(cos_theta, std::cos(0.5f * spot_size), spot_blend);
+    return spot_cosine ? cos_theta * edge : edge;
 }
 
 void validate(const Light& light, const std::string& where) {
     require_nonnegative_rgb(light.value, where + ".value");
+    // The options that only some kinds have must keep their defaults elsewhere: a set one would be ignored.
+    if (light.sphere && light.kind != LightKind::point && light.kind != LightKind::spot)
+        throw InvalidInput(where + ".sphere", "is for point and spot lights only");
+    if (!light.spot_cosine && light.kind != LightKind::spot)
+        throw InvalidInput(where + ".spot_cosine", "is for spot lights only");
     if (!within_world(light.position))
         throw InvalidInput(where + ".position", "must be finite and within ±1e15 on every axis");
     switch (light.kind) {
@@ -100,7 +109,131 @@ namespace ps {
 
 namespace {
 constexpr float kPi = 3.14159265358979323846f;
+
+// A soft point or spot light shaped as a sphere (Light::sphere) rather than as a disc facing the receiver.
+bool is_sphere_light(const Light& light) {
+    return (light.kind == LightKind::point || light.kind == LightKind::spot) && light.sphere && light.radius > 0.0f;
 }
+
+// 1 − cos of the half angle of the cone that a sphere of radius r subtends at distance d > r, written without
+// the cancellation of 1 − √(1 − (r/d)²), which would round a small, far sphere's cone to nothing.
+float sphere_cone_one_minus_cos(float r, float d) {
+    const float sin2 = (r / d) * (r / d);
+    return sin2 / (1.0f + std::sqrt(std::max(0.0f, 1.0f - sin2)));
+}
+
+// Uniform direction in the cone around `axis` (unit) whose half angle has 1 − cos = one_minus_cos, drawn as
+// 1 − cos θ so that a narrow cone keeps its width in float.
+glm::vec3 sample_cone_one_minus_cos(const glm::vec3& axis, float one_minus_cos, float u1, float u2) {
+    const float v = u1 * one_minus_cos;  // 1 − cos θ
+    const float sin_theta = std::sqrt(std::max(0.0f, v * (2.0f - v))), phi = 2.0f * kPi * u2;
+    glm::vec3 b1, b2;
+    orthonormal_basis(axis, b1, b2);
+    return glm::normalize(sin_theta * std::cos(phi) * b1 + sin_theta * std::sin(phi) * b2 + (1.0f - v) * axis);
+}
+
+// Distance along the unit `direction` from x to the surface of the sphere (centre, r): where the ray enters it
+// from outside, where it leaves it from inside; negative where the ray misses. The discriminant comes from the
+// ray's closest approach to the centre, which stays precise for a small sphere far away (Haines et al., "Precision
+// improvements for ray/sphere intersection", Ray Tracing Gems, 2019).
+float sphere_hit_distance(const glm::vec3& x, const glm::vec3& direction, const glm::vec3& centre, float r) {
+    const glm::vec3 f = x - centre;
+    const float b = glm::dot(f, direction);  // the closest approach is at −b along the ray
+    const glm::vec3 across = f - b * direction;
+    const float h2 = r * r - glm::dot(across, across);
+    if (!(h2 >= 0.0f)) return -1.0f;
+    const float h = std::sqrt(h2), c = glm::dot(f, f) - r * r;
+    if (!(c > 0.0f)) return h - b;       // inside: the far root
+    return b < 0.0f ? c / (h - b) : -1.0f;  // outside, ahead: the near root −b − h, without its cancellation
+}
+
+// Radiance I/(πR²) of a sphere light along `outgoing` (unit, leaving the light). A spot's cone attenuates it
+// along that ray's own direction (so that every point of the sphere sends one direction the same radiance), but
+// not as seen from inside the sphere: Cycles 4.x's choices.
+glm::vec3 sphere_radiance(const Light& light, const glm::vec3& outgoing, bool seen_from_outside) {
+    glm::vec3 radiance = light.value / (kPi * light.radius * light.radius);
+    if (light.kind == LightKind::spot && seen_from_outside) radiance *= light.spot_attenuation(outgoing);
+    return radiance;
+}
+
+// Cycles 3.4's soft point or spot light: a disc of the light's radius facing the receiver, radiance I/(πR²)
+// (a spot's times its cone's attenuation along the sampled ray).
+LightIncidence sample_disc_incidence(const Light& light, const glm::vec3& x, float u1, float u2) {
+    LightIncidence out;
+    const glm::vec3 axis = glm::normalize(x - light.position);
+    glm::vec3 b1, b2;
+    orthonormal_basis(axis, b1, b2);
+    const float r = light.radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
+    const glm::vec3 p = light.position + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
+    const glm::vec3 to_light = p - x;
+    const float d2 = glm::dot(to_light, to_light);
+    out.distance = std::sqrt(d2);
+    out.wi = to_light / out.distance;
+    const float cos_light = std::max(0.0f, glm::dot(axis, -out.wi));
+    out.value = light.value * (cos_light / d2);
+    out.pdf = cos_light > 0.0f ? d2 / (cos_light * kPi * light.radius * light.radius) : 0.0f;
+    if (light.kind == LightKind::spot) out.value *= light.spot_attenuation(-out.wi);
+    return out;
+}
+
+// A sphere light: uniform over the cone it subtends from x outside it; from inside, uniform over all directions
+// (finite: the inner wall's radiance over the whole sphere of directions, E = I/R² on any surface).
+LightIncidence sample_sphere_incidence(const Light& light, const glm::vec3& x, float u1, float u2) {
+    LightIncidence out;
+    const glm::vec3 to_centre = light.position - x;
+    const float d2 = glm::dot(to_centre, to_centre);
+    const bool outside = d2 > light.radius * light.radius;
+    if (outside) {
+        const float d = std::sqrt(d2);
+        const float one_minus_cos = sphere_cone_one_minus_cos(light.radius, d);
+        out.wi = sample_cone_one_minus_cos(to_centre / d, one_minus_cos, u1, u2);
+        out.pdf = 1.0f / (2.0f * kPi * one_minus_cos);
+    } else {
+        out.wi = sample_uniform_sphere(u1, u2);
+        out.pdf = 1.0f / (4.0f * kPi);
+    }
+    out.distance = sphere_hit_distance(x, out.wi, light.position, light.radius);
+    // A direction at the cone's edge may miss the sphere by rounding: it grazes it at its closest approach.
+    if (!(out.distance >= 0.0f)) out.distance = glm::dot(to_centre, out.wi);
+    out.value = sphere_radiance(light, -out.wi, outside) / out.pdf;
+    return out;
+}
+
+// Where the photon of a soft point or spot light leaving along `direction` starts, given the direction: uniform
+// over the disc of the light's radius facing that direction (the rays of one direction leaving a uniformly
+// bright sphere, or a disc facing their receivers, cross it uniformly), lifted onto the front of the sphere for a
+// spherical emitter. Either way the photon travels the same line; the sphere only moves its start.
+glm::vec3 soft_light_origin(const Light& light, const glm::vec3& direction, bool on_sphere, float u3, float u4) {
+    glm::vec3 d1, d2;
+    orthonormal_basis(direction, d1, d2);
+    const float r = std::sqrt(u3), psi = 2.0f * kPi * u4;
+    const glm::vec3 across = std::cos(psi) * d1 + std::sin(psi) * d2;  // unit
+    if (!on_sphere) return light.position + (light.radius * r) * across;
+    return light.position + light.radius * (r * across + std::sqrt(std::max(0.0f, 1.0f - r * r)) * direction);
+}
+
+// A spot's photons leave in directions drawn in proportion to its hard-edged cone's profile P(μ), μ = cos θ from
+// the axis: P = μ with Cycles 3.4's cos θ factor, P = 1 without (Cycles 4.x). The smoothstep edge then scales
+// their power, whose mean stays the light's flux.
+// ∫ over the hard-edged cone of P dω: π(1 − cos²α), or 2π(1 − cos α).
+float spot_profile_integral(const Light& light, float cos_half_angle) {
+    const float c = cos_half_angle;
+    return light.spot_cosine ? kPi * (1.0f - c * c) : 2.0f * kPi * (1.0f - c);
+}
+
+// μ with density ∝ P(μ) on [cos α, 1]: μ² uniform in [cos²α, 1], or μ uniform in [cos α, 1].
+float sample_spot_cosine(const Light& light, float cos_half_angle, float u) {
+    const float c = cos_half_angle;
+    return light.spot_cosine ? std::sqrt(c * c + u * (1.0f - c * c)) : c + u * (1.0f - c);
+}
+
+// Flux carried by a spot's photon along μ: intensity I·P(μ)·smoothstep over the density P(μ) / ∫P dω.
+glm::vec3 spot_photon_power(const Light& light, float cos_half_angle, float mu) {
+    return spot_profile_integral(light, cos_half_angle) * light.value *
+           spot_smoothstep(mu, cos_half_angle, light.spot_blend);
+}
+
+}  // namespace
 
 // Uniform point on an area light: the rectangle, or the ellipse inscribed in it.
 glm::vec3 point_on_area_light(const Light& light, float u1, float u2) {
@@ -119,28 +252,18 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
     switch (light.kind) {
         case LightKind::point:
         case LightKind::spot: {
-            glm::vec3 to_light = light.position - x;
-            if (light.radius > 0.0f) {
-                // A disc of the light's radius facing the receiver, radiance I/(πR²): what Cycles 3.4 does.
-                const glm::vec3 axis = glm::normalize(-to_light);
-                glm::vec3 b1, b2;
-                orthonormal_basis(axis, b1, b2);
-                const float r = light.radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
-                const glm::vec3 p = light.position + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
-                to_light = p - x;
-                const float d2 = glm::dot(to_light, to_light);
-                out.distance = std::sqrt(d2);
-                out.wi = to_light / out.distance;
-                const float cos_light = std::max(0.0f, glm::dot(axis, -out.wi));
-                out.value = light.value * (cos_light / d2);
-                out.pdf = cos_light > 0.0f ? d2 / (cos_light * kPi * light.radius * light.radius) : 0.0f;
+            if (is_sphere_light(light)) {
+                out = sample_sphere_incidence(light, x, u1, u2);
+            } else if (light.radius > 0.0f) {
+                out = sample_disc_incidence(light, x, u1, u2);
             } else {
+                const glm::vec3 to_light = light.position - x;
                 const float d2 = glm::dot(to_light, to_light);
                 out.distance = std::sqrt(d2);
                 out.wi = to_light / out.distance;
                 out.value = light.value / d2;
+                if (light.kind == LightKind::spot) out.value *= light.spot_attenuation(-out.wi);
             }
-            if (light.kind == LightKind::spot) out.value *= light.spot_attenuation(-out.wi);
             break;
         }
         case LightKind::sun: {
@@ -174,6 +297,18 @@ LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3
         case LightKind::point:
         case LightKind::spot: {
             if (!(light.radius > 0.0f)) return out;
+            if (is_sphere_light(light)) {
+                const float t = sphere_hit_distance(x, direction, light.position, light.radius);
+                if (!(t > 0.0f)) return out;
+                const glm::vec3 from_light = x - light.position;
+                const float d2 = glm::dot(from_light, from_light);
+                const bool outside = d2 > light.radius * light.radius;
+                const float pdf = outside
+                                      ? 1.0f / (2.0f * kPi * sphere_cone_one_minus_cos(light.radius, std::sqrt(d2)))
+                                      : 1.0f / (4.0f * kPi);
+                out = {true, t, sphere_radiance(light, -direction, outside), pdf};
+                return out;
+            }
             // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²) (a spot's
             // times its cone's attenuation towards x).
             const glm::vec3 from_light = x - light.position;
@@ -229,7 +364,9 @@ glm::vec3 light_flux(const Light& light, float scene_radius) {
         case LightKind::sun: return kPi * scene_radius * scene_radius * light.value;
         case LightKind::area: return kPi * light.area() * light.value;
         case LightKind::spot:
-            return 2.0f * kPi * spot_cone_integral(std::cos(0.5f * light.spot_size), light.spot_blend) * light.value;
+            return 2.0f * kPi *
+                   spot_cone_integral(std::cos(0.5f * light.spot_size), light.spot_blend, light.spot_cosine) *
+                   light.value;
     }
     return glm::vec3(0.0f);
 }
@@ -263,24 +400,17 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
             break;
         }
         case LightKind::spot: {
-            // cos θ distributed ∝ cos θ over the cone (μ² uniform in [cos²α, 1]): the hard-edged cone's intensity
-            // profile exactly; the smoothstep edge then scales the power, whose mean stays the light's flux.
+            // μ = cos θ drawn in proportion to the hard-edged cone's profile (spot_profile_integral).
             const glm::vec3 axis = glm::normalize(light.direction);
             const float c = std::cos(0.5f * light.spot_size);
-            const float mu = std::sqrt(c * c + u1 * (1.0f - c * c));
+            const float mu = sample_spot_cosine(light, c, u1);
             const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - mu * mu)), phi = 2.0f * kPi * u2;
             glm::vec3 b1, b2;
             orthonormal_basis(axis, b1, b2);
             out.direction = glm::normalize(sin_theta * std::cos(phi) * b1 + sin_theta * std::sin(phi) * b2 + mu * axis);
-            out.power = kPi * (1.0f - c * c) * light.value * (spot_smoothstep(mu, c, light.spot_blend));
-            out.origin = light.position;
-            if (light.radius > 0.0f) {
-                // The emitting disk of a soft spot faces the receiver: offset across the direction of travel.
-                glm::vec3 d1, d2;
-                orthonormal_basis(out.direction, d1, d2);
-                const float r = light.radius * std::sqrt(u3), psi = 2.0f * kPi * u4;
-                out.origin += r * (std::cos(psi) * d1 + std::sin(psi) * d2);
-            }
+            out.power = spot_photon_power(light, c, mu);
+            out.origin = light.radius > 0.0f ? soft_light_origin(light, out.direction, light.sphere, u3, u4)
+                                             : light.position;
             break;
         }
         case LightKind::area: {
@@ -309,7 +439,8 @@ float emission_direction_pdf(const Light& light, const glm::vec3& /*anchor*/, co
         case LightKind::spot: {
             const float c = std::cos(0.5f * light.spot_size);
             const float mu = glm::dot(direction, glm::normalize(light.direction));
-            return mu >= c && c < 1.0f ? mu / (kPi * (1.0f - c * c)) : 0.0f;
+            if (!(mu >= c && c < 1.0f)) return 0.0f;
+            return (light.spot_cosine ? mu : 1.0f) / spot_profile_integral(light, c);
         }
         case LightKind::area: return std::max(0.0f, glm::dot(direction, light.area_normal())) / kPi;
         case LightKind::sun: return 0.0f;
@@ -326,28 +457,16 @@ EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const
     switch (light.kind) {
         case LightKind::point: {
             out.power = light_flux(light, 0.0f);
-            if (light.radius > 0.0f) {
-                // Rays of one direction leaving a uniformly bright sphere cross the disc facing that direction
-                // uniformly: start where such a ray leaves the sphere's front.
-                glm::vec3 d1, d2;
-                orthonormal_basis(direction, d1, d2);
-                const float r = std::sqrt(u3), psi = 2.0f * kPi * u4;
-                const glm::vec3 across = r * (std::cos(psi) * d1 + std::sin(psi) * d2);
-                out.origin = anchor + light.radius * (across + std::sqrt(std::max(0.0f, 1.0f - r * r)) * direction);
-            }
+            // A soft point light emits photons from a sphere whether it is lit as a sphere or as Cycles 3.4's disc.
+            if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, true, u3, u4);
             break;
         }
         case LightKind::spot: {
             const float c = std::cos(0.5f * light.spot_size);
             const float mu = glm::dot(direction, glm::normalize(light.direction));
             if (!(mu >= c)) break;
-            out.power = kPi * (1.0f - c * c) * light.value * spot_smoothstep(mu, c, light.spot_blend);
-            if (light.radius > 0.0f) {
-                glm::vec3 d1, d2;
-                orthonormal_basis(direction, d1, d2);
-                const float r = light.radius * std::sqrt(u3), psi = 2.0f * kPi * u4;
-                out.origin += r * (std::cos(psi) * d1 + std::sin(psi) * d2);
-            }
+            out.power = spot_photon_power(light, c, mu);
+            if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, light.sphere, u3, u4);
             break;
         }
         case LightKind::area:

@@ -21,7 +21,7 @@ using namespace ps;
 // For every light with a size: the direction sample_light_incidence draws, traced back with intersect_light,
 // hits the light at the sampled distance with the same density, and radiance / pdf = value.
 TEST(Reference, LightHitsAgreeWithLightSampling) {
-    std::vector<Light> lights(4);
+    std::vector<Light> lights(6);
     lights[0].kind = LightKind::point;
     lights[0].position = {0.2f, 0.1f, 2.0f};
     lights[0].radius = 0.3f;
@@ -42,6 +42,11 @@ TEST(Reference, LightHitsAgreeWithLightSampling) {
     lights[3].spot_size = 1.2f;
     lights[3].spot_blend = 0.4f;
     lights[3].value = glm::vec3(4.0f);
+    lights[4] = lights[0];  // the point light as a true sphere (Cycles 4.x, Soft Falloff off)
+    lights[4].sphere = true;
+    lights[5] = lights[3];  // the spot as a sphere, with Cycles 4.x's falloff
+    lights[5].sphere = true;
+    lights[5].spot_cosine = false;
     const glm::vec3 x(0.1f, -0.2f, 0.0f);
     Rng rng(1, RngDomain::camera, 0);
     for (const Light& light : lights) {

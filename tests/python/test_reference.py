@@ -56,6 +56,31 @@ def test_point_light_over_a_lambert_plane(radius):
     assert abs(error.mean()) < 0.003
 
 
+@pytest.mark.parametrize("sphere", [True, False])
+def test_sphere_and_disc_lights_near_a_lambert_plane(sphere):
+    """A light of radius 0.6 at height 1.2: the near field, where the two shapes of a soft light differ. A
+    uniformly bright sphere wholly above the plane lights it by the point law, E = I cos(theta) / d^2 (Cycles
+    4.x with Soft Falloff off); Cycles 3.4's disc facing the receiver by I cos(theta) / (d^2 + R^2), 7 to 20 %
+    less under the camera. Light samples (uniform in the sphere's cone) and BSDF rays that hit the sphere share
+    the MIS weights."""
+    intensity, albedo, light, radius = 20.0, 0.7, (0.3, -0.2, 1.2), 0.6
+    scene = ps.Scene()
+    scene.add_material(name="plane", color=(albedo,) * 3)
+    v, t = scenes.quad((-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0))
+    scene.add_mesh(name="plane", vertices=v, triangles=t)
+    scene.add_point_light(name="lamp", position=light, intensity=(intensity,) * 3, radius=radius, sphere=sphere)
+    camera, x, y = top_down_camera(1.0, 24)
+    image, _ = ps.render_reference(scene, camera, samples=1024, seed=3)
+    expected = per_pixel(point_light_radiance(x, y, light, intensity, albedo, 0.0 if sphere else radius), 24)
+    other = per_pixel(point_light_radiance(x, y, light, intensity, albedo, radius if sphere else 0.0), 24)
+    error = image[..., 0] / expected - 1.0
+    print(f"\n{'sphere' if sphere else 'disc'} of radius {radius}: per-pixel error max {np.abs(error).max():.4f}, "
+          f"mean {error.mean():.5f}; the other shape's law off by {(image[..., 0] / other - 1.0).mean():+.3f}")
+    assert np.abs(error).max() < 0.03
+    assert abs(error.mean()) < 0.002
+    assert np.abs(image[..., 0] / other - 1.0).min() > 0.05    # R^2 / (d^2 + R^2) >= 7 % at every pixel
+
+
 def closed_box(albedo, emission, size=1.0):
     """A closed cube, every face emitting `emission` and reflecting `albedo` (inward and outward)."""
     scene = ps.Scene()

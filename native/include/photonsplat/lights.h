@@ -8,11 +8,14 @@
 namespace ps {
 
 enum class LightKind {
-    point,  // isotropic intensity I [W/sr]; a sphere of `radius` for soft shadows (0 = a true point)
+    point,  // isotropic intensity I [W/sr]; `radius` > 0 gives it a size for soft shadows (0 = a true point):
+            // Cycles 3.4's disc of that radius facing the receiver, or with `sphere` a true sphere (Cycles 4.x
+            // with Soft Falloff off); either way of radiance I/(πR²)
     sun,    // distant light, irradiance E [W/m²] on a surface facing it; `angle` = full angular diameter
     area,   // one-sided rectangle (or ellipse) emitting radiance L [W/(sr·m²)] towards normalize(cross(axis_u, axis_v))
-    spot,   // a point light (intensity I on the axis, `radius`) restricted to a cone around `direction`, with
-            // Cycles 3.4's falloff: I(θ) = I · cos θ · smoothstep((cos θ − cos(size/2)) / ((1 − cos(size/2))·blend))
+    spot,   // a point light (intensity I on the axis, `radius`, `sphere`) restricted to a cone around `direction`:
+            // I(θ) = I · cos θ · smoothstep((cos θ − cos(size/2)) / ((1 − cos(size/2))·blend)), Cycles 3.4's falloff,
+            // or without the cos θ factor (spot_cosine false), Cycles 4.x's
 };
 
 struct Light {
@@ -22,16 +25,21 @@ struct Light {
     glm::vec3 position{0.0f};    // point: centre; area: centre of the rectangle. In Scene::lights(): render space
     glm::vec3 direction{0.0f, 0.0f, -1.0f};  // sun: direction the light travels; spot: the cone's axis (unit)
     float radius = 0.0f;         // point and spot, >= 0
+    // Point and spot: a sphere of `radius` (Cycles 4.x's point and spot lights with Soft Falloff off) instead of
+    // the disc of `radius` facing the receiver (Cycles 3.4, and 4.x with Soft Falloff on). A spot's sphere sends
+    // each ray its cone's attenuation along that ray's direction.
+    bool sphere = false;
     float angle = 0.0f;          // sun only, full angular diameter in radians, in [0, π)
     glm::vec3 axis_u{1.0f, 0.0f, 0.0f};  // area: full edge vectors (object scale included)
     glm::vec3 axis_v{0.0f, 1.0f, 0.0f};
     bool ellipse = false;        // area: the ellipse (disk) inscribed in the rectangle instead of the rectangle
     float spot_size = 0.0f;      // spot: full cone angle in radians, in (0, π]
     float spot_blend = 0.0f;     // spot: softness of the cone's edge, in [0, 1]
+    bool spot_cosine = true;     // spot: the falloff has Cycles 3.4's cos θ factor (false: Cycles 4.x's, without)
 
     glm::vec3 area_normal() const;  // unit normal of the emitting side of an area light
     float area() const;             // area light surface area (π/4 of the rectangle's for an ellipse)
-    // Spot only: the falloff factor cos θ · smoothstep(...) for a unit direction leaving the light (0 outside).
+    // Spot only: the falloff factor [cos θ ·] smoothstep(...) for a unit direction leaving the light (0 outside).
     float spot_attenuation(const glm::vec3& outgoing) const;
 };
 
@@ -39,6 +47,9 @@ const char* to_string(LightKind kind);
 
 // Light arriving at a point from one sampled point of a light (for shadow rays).
 // Reflected radiance estimate = f_r · value · max(0, n·wi), with a shadow ray of length `distance` towards wi.
+// A sphere light is sampled uniformly over the cone it subtends. From inside the sphere (a receiver within
+// `radius` of its centre) it is sampled uniformly over all directions, each meeting the inner wall at radiance
+// I/(πR²) with no spot cone applied, as Cycles 4.x does there: finite, E = I/R² on any surface inside.
 struct LightIncidence {
     glm::vec3 wi;      // unit, from the receiving point towards the light
     float distance;    // to the sampled light point (infinity for a sun)
@@ -49,9 +60,9 @@ LightIncidence sample_light_incidence(const Light& light, const glm::vec3& x, fl
 bool light_is_delta(const Light& light);  // a point of radius 0 or a 0° sun: one shadow ray is exact
 
 // Where a ray from x along `direction` (unit) meets the light's emitting shape AS sample_light_incidence(x)
-// samples it (a point light's disc facing x, a sun's cone, an area light's front face), for a path tracer whose
-// BSDF-sampled rays may hit lights (multiple importance sampling). pdf is the density sample_light_incidence
-// has of drawing that direction from x. A delta light is never hit.
+// samples it (a point light's disc facing x or its sphere, a sun's cone, an area light's front face), for a
+// path tracer whose BSDF-sampled rays may hit lights (multiple importance sampling). pdf is the density
+// sample_light_incidence has of drawing that direction from x. A delta light is never hit.
 struct LightHit {
     bool hit = false;
     float distance = 0.0f;       // along the ray; infinity for a sun
@@ -77,7 +88,8 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
 // caustic_aim.h). Point, spot and area lights only. Their photons leave an anchor: the centre of a point or
 // spot light, or for an area light the point emission_anchor(u1, u2) draws exactly as sample_light_emission
 // does. Given the direction, the origin is distributed as in sample_light_emission (a uniform offset on the
-// disc of a soft light facing that direction), so the two samplings differ in their direction density alone.
+// disc of a soft light facing that direction, lifted onto the sphere's front for a spherical emitter), so the
+// two samplings differ in their direction density alone.
 bool light_can_aim(const Light& light);  // point, spot, area
 glm::vec3 emission_anchor(const Light& light, float u1, float u2);
 // Solid-angle density with which sample_light_emission draws `direction` (unit) leaving `anchor`; 0 where the
