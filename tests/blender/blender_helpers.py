@@ -51,10 +51,17 @@ def read_exr(path):
         bpy.data.images.remove(image)
 
 
+def enable_nodes(id_block):
+    """Make a material or world render its node tree (Blender 5.0 always does; its use_nodes is deprecated)."""
+    from photonsplat import compat
+    if compat.has_use_nodes_switch(id_block):
+        id_block.use_nodes = True
+
+
 def uniform_world(scene, color=(1.0, 1.0, 1.0), strength=1.0):
     """A new world of constant colour x strength (a Background node) for `scene`; returns it."""
     world = bpy.data.worlds.new("Uniform")
-    world.use_nodes = True
+    enable_nodes(world)
     background = world.node_tree.nodes["Background"]
     background.inputs["Color"].default_value = (*color, 1.0)
     background.inputs["Strength"].default_value = strength

@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import uniform_world
+from blender_helpers import enable_nodes, uniform_world
 from photonsplat import compat, export
 from photonsplat.export import materials
 
@@ -80,7 +80,7 @@ def add_camera(scene, location=(0.0, -5.0, 1.0)):
 def node_material(name, shader_type, **inputs):
     """A material whose Surface is one shader node of `shader_type` with the given input values."""
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
+    enable_nodes(mat)
     nodes = mat.node_tree.nodes
     nodes.clear()
     shader = nodes.new(shader_type)

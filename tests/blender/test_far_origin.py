@@ -11,7 +11,7 @@ in-place moves.
 import bpy
 import numpy as np
 
-from blender_helpers import render_pixels, use_photonsplat
+from blender_helpers import enable_nodes, render_pixels, use_photonsplat
 
 OFFSET = (1e5, -1e5, 1e5)
 
@@ -21,7 +21,7 @@ def build_scene(scene):
     bpy.ops.mesh.primitive_cube_add(size=1.0, location=(0.75, 0.5, 0.5))
     bpy.ops.mesh.primitive_uv_sphere_add(segments=24, ring_count=12, radius=0.5, location=(-0.75, -0.25, 0.625))
     glass = bpy.data.materials.new("glass")
-    glass.use_nodes = True
+    enable_nodes(glass)
     nodes = glass.node_tree.nodes
     nodes.remove(nodes["Principled BSDF"])
     bsdf = nodes.new("ShaderNodeBsdfGlass")

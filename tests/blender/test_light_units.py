@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import open_scene, render_pixels, uniform_world, use_photonsplat
+from blender_helpers import enable_nodes, open_scene, render_pixels, uniform_world, use_photonsplat
 from photonsplat import compat, engine
 
 SIZE = 64
@@ -134,7 +134,7 @@ def test_emissive_mesh_matches_this_blenders_cycles(tmp_path, core):
     lamp = bpy.context.active_object
     lamp.visible_camera = False
     material = bpy.data.materials.new("Lamp")
-    material.use_nodes = True
+    enable_nodes(material)
     tree = material.node_tree
     tree.nodes.clear()
     emission = tree.nodes.new("ShaderNodeEmission")

@@ -11,7 +11,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import caustic_landing, open_scene, pixel_of, render_pixels, use_photonsplat
+from blender_helpers import caustic_landing, enable_nodes, open_scene, pixel_of, render_pixels, use_photonsplat
 from photonsplat import engine
 from scene_geometry import floor_ring
 
@@ -135,7 +135,7 @@ def test_emissive_mesh_matches_cycles(diffuse_scene, tmp_path, core):
     bpy.ops.mesh.primitive_plane_add(size=0.5, location=(0.0, 0.0, 1.5))
     lamp = bpy.context.active_object
     material = bpy.data.materials.new("Lamp")
-    material.use_nodes = True
+    enable_nodes(material)
     tree = material.node_tree
     tree.nodes.clear()
     emission = tree.nodes.new("ShaderNodeEmission")
@@ -159,7 +159,7 @@ def test_export_warnings_reach_the_report(caustics_scene, tmp_path, core):
     bpy.data.lights["Light"].type = 'AREA'
     bpy.data.lights["Light"].spread = math.radians(90.0)               # not modelled: rendered as 180 degrees, with a note
     toon = bpy.data.materials.new("Toon")
-    toon.use_nodes = True
+    enable_nodes(toon)
     tree = toon.node_tree
     tree.nodes.clear()
     tree.links.new(tree.nodes.new("ShaderNodeBsdfToon").outputs[0],

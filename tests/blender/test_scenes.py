@@ -53,7 +53,7 @@ def test_atrium_is_saved_as_the_benchmark_expects():
             mesh.calc_loop_triangles()
             triangles += len(mesh.loop_triangles)
     assert 50_000 <= triangles <= 300_000
-    kinds = {node.bl_idname for material in bpy.data.materials if material.use_nodes
+    kinds = {node.bl_idname for material in bpy.data.materials if compat.uses_nodes(material)
              for node in material.node_tree.nodes}
     assert {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass", compat.GLOSSY_BSDF_IDNAME} <= kinds
 

@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import render_pixels, uniform_world, use_photonsplat
+from blender_helpers import enable_nodes, render_pixels, uniform_world, use_photonsplat
 from photonsplat import compat, engine, export
 
 
@@ -26,7 +26,7 @@ def add_camera(scene, location=(0.0, 0.0, 10.0), rotation=(0.0, 0.0, 0.0), ortho
 
 def material(name, shader="ShaderNodeBsdfDiffuse"):
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
+    enable_nodes(mat)
     tree = mat.node_tree
     tree.nodes.clear()
     node = tree.nodes.new(shader)
