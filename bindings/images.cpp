@@ -22,7 +22,9 @@ void bind_images(py::module_& m) {
             py::gil_scoped_release release;
             ps::write_image(path, image.data(), w, h, c);
         },
-        "path"_a, "image"_a, "Writes (H, W, C) linear floats: EXR as is, PNG/JPEG clamped and sRGB-encoded.");
+        "path"_a, "image"_a,
+        "Writes (H, W, C) linear floats: EXR as is, PNG/JPEG clamped and sRGB-encoded. Raises RuntimeError in a "
+        "build without image files (IMAGE_FILES is False: the Blender extension's).");
 }
 
 }  // namespace ps_py

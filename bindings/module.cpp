@@ -13,6 +13,7 @@
 #include "bindings.h"
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/image.h"
 #include "photonsplat/memory_budget.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
@@ -49,6 +50,9 @@ PYBIND11_MODULE(_core, m) {
     m.attr("METHODS") = py::tuple(py::cast(ps::splat_method_names()));
     m.attr("KERNELS") = py::make_tuple("uniform", "epanechnikov");
     m.attr("FILM_OUTPUTS") = py::tuple(py::cast(ps::film_output_names(ps::kAllFilmOutputs)));
+    // Whether this module reads and writes image files (write_image, add_texture(path=...)): True in the build
+    // against Debian's libraries, False in the Blender extension's, which has no OpenImageIO and gets pixels.
+    m.attr("IMAGE_FILES") = ps::image_files_supported();
 
     static py::exception<ps::Cancelled> cancelled(m, "Cancelled", PyExc_RuntimeError);
     py::register_exception_translator([](std::exception_ptr p) {

@@ -149,9 +149,9 @@ void bind_translation(py::module_& m) {
                 return s.add_texture(texture_from_array(name, pixels, color_space));
             },
             "name"_a, "path"_a = py::none(), "pixels"_a = py::none(), "color_space"_a = "sRGB",
-            "Adds an image texture from a file (read with OpenImageIO) or from pixels (H,W,C) with row 0 at the "
-            "bottom (Blender's Image.pixels); color_space 'sRGB' (decoded) or 'linear'. Returns its index for "
-            "add_material(texture=...).")
+            "Adds an image texture from a file (read with OpenImageIO; not where IMAGE_FILES is False) or from "
+            "pixels (H,W,C) with row 0 at the bottom (Blender's Image.pixels); color_space 'sRGB' (decoded) or "
+            "'linear'. Returns its index for add_material(texture=...).")
         .def(
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,

@@ -24,6 +24,7 @@ bl_info = {
 try:
     from ._core import (  # noqa: F401  (re-exported scripting API)
         FILM_OUTPUTS,
+        IMAGE_FILES,
         KERNELS,
         METHODS,
         Camera,

@@ -34,8 +34,12 @@ def load_core():
             return importlib.import_module("._core", __package__)
         except Exception as error:  # any failure to load is reported the same way
             reason = f"the native module photonsplat._core could not be loaded: {error}"
-    raise CoreUnavailable(f"{reason}. Build the project (see README) and use the add-on laid out in "
-                          "build/blender/addons")
+    if __package__.startswith("bl_ext."):     # installed as a Blender 4.2+ extension
+        advice = (f"The extension's module is built for Python 3.11 on x86-64 Linux with glibc 2.34 or later; this "
+                  f"Blender's Python is {sys.version_info.major}.{sys.version_info.minor}")
+    else:
+        advice = "Build the project (see README) and use the add-on laid out in build/blender/addons"
+    raise CoreUnavailable(f"{reason}. {advice}")
 
 
 @dataclass

@@ -12,6 +12,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 
+#include "embree_api.h"
 #include "photonsplat/scene.h"
 
 namespace ps {
@@ -32,9 +33,10 @@ bool embree_accepts(const Ray& ray, float t_min, float t_max) {
 // releasing one while another thread still uses it is how native add-ons crash Blender.
 RTCDevice shared_device() {
     static RTCDevice device = [] {
-        RTCDevice d = rtcNewDevice(nullptr);
+        const EmbreeApi& rtc = embree_api();
+        RTCDevice d = rtc.rtcNewDevice(nullptr);
         if (!d) throw std::runtime_error("Embree: could not create a device (error " +
-                                         std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+                                         std::to_string(static_cast<int>(rtc.rtcGetDeviceError(nullptr))) + ")");
         return d;
     }();
     return device;
@@ -42,7 +44,8 @@ RTCDevice shared_device() {
 
 // Embree keeps an error code per device and thread: read it right after the calls that can fail.
 void throw_on_embree_error(RTCDevice device, const char* what) {
-    const RTCError error = rtcGetDeviceError(device);
+    const EmbreeApi& rtc = embree_api();
+    const RTCError error = rtc.rtcGetDeviceError(device);
     if (error == RTC_ERROR_NONE) return;
     const char* reason = error == RTC_ERROR_OUT_OF_MEMORY ? "out of memory" : "internal error";
     throw std::runtime_error(std::string("Embree: ") + what + " failed (" + reason + ", code " +
@@ -53,48 +56,51 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
 bool is_flat(const Instance& instance) { return instance.normal_to_world == glm::mat3(0.0f); }
 
 void set_instance_transform(RTCGeometry geometry, const Instance& instance) {
+    const EmbreeApi& rtc = embree_api();
     const glm::mat4 m = is_flat(instance) ? glm::mat4(1.0f) : instance.to_world;
     // glm is column-major: exactly Embree's RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR.
-    rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &m[0][0]);
+    rtc.rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT4X4_COLUMN_MAJOR, &m[0][0]);
 }
 
 }  // namespace
 
 struct RayTracer::Impl {
+    const EmbreeApi& rtc = embree_api();   // every Embree call goes through this table (embree_api.h says why)
     RTCScene top = nullptr;
     std::vector<RTCScene> meshes;          // one per MeshData (nullptr when it has no triangles)
     std::vector<RTCGeometry> instances;    // one per Instance (nullptr when its mesh is empty)
 
     ~Impl() {
         for (RTCGeometry g : instances)
-            if (g) rtcReleaseGeometry(g);
+            if (g) rtc.rtcReleaseGeometry(g);
         for (RTCScene s : meshes)
-            if (s) rtcReleaseScene(s);
-        if (top) rtcReleaseScene(top);
+            if (s) rtc.rtcReleaseScene(s);
+        if (top) rtc.rtcReleaseScene(top);
     }
 };
 
 RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances) : impl_(new Impl) {
     try {
+        const EmbreeApi& rtc = impl_->rtc;
         RTCDevice device = shared_device();
-        rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
+        rtc.rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
         for (const MeshData& mesh : meshes) {
             const size_t triangles = mesh.triangle_count();
             if (triangles == 0) {
                 impl_->meshes.push_back(nullptr);
                 continue;
             }
-            RTCScene scene = rtcNewScene(device);
+            RTCScene scene = rtc.rtcNewScene(device);
             if (!scene) throw_on_embree_error(device, "creating a mesh scene");
             impl_->meshes.push_back(scene);
-            rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-            RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+            rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+            RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            auto* vertices = static_cast<float*>(rtc.rtcSetNewGeometryBuffer(
                 geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-            auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+            auto* indices = static_cast<unsigned*>(rtc.rtcSetNewGeometryBuffer(
                 geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
             if (!vertices || !indices) {
-                rtcReleaseGeometry(geometry);
+                rtc.rtcReleaseGeometry(geometry);
                 throw std::runtime_error("Embree: out of memory for mesh '" + mesh.name + "' (" +
                                          std::to_string(triangles) + " triangles)");
             }
@@ -104,37 +110,37 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
                 vertices[3 * i + 2] = mesh.positions[i].z;
             }
             for (size_t i = 0; i < mesh.indices.size(); ++i) indices[i] = mesh.indices[i];
-            rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
-            rtcCommitGeometry(geometry);
-            rtcAttachGeometryByID(scene, geometry, 0);
-            rtcReleaseGeometry(geometry);
-            rtcCommitScene(scene);
+            rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
+            rtc.rtcCommitGeometry(geometry);
+            rtc.rtcAttachGeometryByID(scene, geometry, 0);
+            rtc.rtcReleaseGeometry(geometry);
+            rtc.rtcCommitScene(scene);
             throw_on_embree_error(device, "building a mesh BVH");
             bytes_ += mesh.positions.size() * 3 * sizeof(float) + triangles * 3 * sizeof(unsigned);
         }
 
-        impl_->top = rtcNewScene(device);
+        impl_->top = rtc.rtcNewScene(device);
         if (!impl_->top) throw_on_embree_error(device, "creating the scene");
         // Dynamic: moving instances refits the top level instead of rebuilding it from scratch.
-        rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
+        rtc.rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
         for (uint32_t i = 0; i < instances.size(); ++i) {
             RTCScene mesh = impl_->meshes[instances[i].mesh];
             if (!mesh) {
                 impl_->instances.push_back(nullptr);
                 continue;
             }
-            RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-            rtcSetGeometryInstancedScene(geometry, mesh);
-            rtcSetGeometryTimeStepCount(geometry, 1);
+            RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+            rtc.rtcSetGeometryInstancedScene(geometry, mesh);
+            rtc.rtcSetGeometryTimeStepCount(geometry, 1);
             set_instance_transform(geometry, instances[i]);
-            rtcSetGeometryMask(geometry, instances[i].visibility);
-            rtcCommitGeometry(geometry);
+            rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
+            rtc.rtcCommitGeometry(geometry);
             // The geometry id is the instance index: hits name their instance directly.
-            rtcAttachGeometryByID(impl_->top, geometry, i);
-            if (is_flat(instances[i])) rtcDisableGeometry(geometry);
+            rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
+            if (is_flat(instances[i])) rtc.rtcDisableGeometry(geometry);
             impl_->instances.push_back(geometry);
         }
-        rtcCommitScene(impl_->top);
+        rtc.rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
         measure_reach(instances);
         bytes_ += instances.size() * (sizeof(glm::mat4) + 64);  // transform + a top-level BVH node, roughly
@@ -147,17 +153,18 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
 RayTracer::~RayTracer() { delete impl_; }
 
 void RayTracer::update_instances(const std::vector<Instance>& instances, const std::vector<uint32_t>& moved) {
+    const EmbreeApi& rtc = impl_->rtc;
     for (uint32_t i : moved) {
         RTCGeometry geometry = impl_->instances[i];
         if (!geometry) continue;
         set_instance_transform(geometry, instances[i]);
-        rtcCommitGeometry(geometry);
+        rtc.rtcCommitGeometry(geometry);
         if (is_flat(instances[i]))
-            rtcDisableGeometry(geometry);
+            rtc.rtcDisableGeometry(geometry);
         else
-            rtcEnableGeometry(geometry);
+            rtc.rtcEnableGeometry(geometry);
     }
-    rtcCommitScene(impl_->top);
+    rtc.rtcCommitScene(impl_->top);
     throw_on_embree_error(shared_device(), "updating instance transforms");
     measure_reach(instances);
 }
@@ -173,7 +180,7 @@ void RayTracer::measure_reach(const std::vector<Instance>& instances) {
         reach_offset_ = std::max(reach_offset_, scale * glm::length(glm::dvec3(glm::vec3(instance.to_world[3]))));
     }
     RTCBounds bounds;
-    rtcGetSceneBounds(impl_->top, &bounds);
+    impl_->rtc.rtcGetSceneBounds(impl_->top, &bounds);
     scene_lo_ = glm::vec3(bounds.lower_x, bounds.lower_y, bounds.lower_z);
     scene_hi_ = glm::vec3(bounds.upper_x, bounds.upper_y, bounds.upper_z);
 }
@@ -241,7 +248,7 @@ bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hi
     rh.ray = embree_ray(ray, t_min, t_max, rays);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->top, &context, &rh);
+    impl_->rtc.rtcIntersect1(impl_->top, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar + shift;
     hit.instance = rh.hit.instID[0];
@@ -258,7 +265,7 @@ bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r = embree_ray(ray, t_min, t_max, rays);
-    rtcOccluded1(impl_->top, &context, &r);
+    impl_->rtc.rtcOccluded1(impl_->top, &context, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
 }
 

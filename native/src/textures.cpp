@@ -5,8 +5,6 @@
 #include <limits>
 #include <memory>
 
-#include <OpenImageIO/imageio.h>
-
 #include "photonsplat/errors.h"
 
 namespace ps {
@@ -17,8 +15,6 @@ namespace {
 float srgb_to_linear(float c) {
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
-
-constexpr int kMaxTextureSide = 65536;
 
 }  // namespace
 
@@ -71,41 +67,6 @@ glm::vec3 Texture::lookup(const glm::vec2& uv) const {
     const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
     return (1.0f - ty) * ((1.0f - tx) * texel(x0, y0) + tx * texel(x0 + 1, y0)) +
            ty * ((1.0f - tx) * texel(x0, y0 + 1) + tx * texel(x0 + 1, y0 + 1));
-}
-
-Texture load_texture(const std::string& name, const std::string& path, ColorSpace space, const std::string& field) {
-    using namespace OIIO;
-    // Cycles reads straight (unassociated) colour; OIIO would premultiply PNG alpha into the colour otherwise.
-    ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    std::unique_ptr<ImageInput> input = ImageInput::open(path, &config);
-    if (!input) {
-        std::string why = geterror();
-        if (why.empty()) why = "cannot open";
-        throw InvalidInput(field, "'" + path + "': " + why);
-    }
-    const ImageSpec& spec = input->spec();
-    const int width = spec.width, height = spec.height, channels = std::min(spec.nchannels, 4);
-    if (width < 1 || height < 1 || width > kMaxTextureSide || height > kMaxTextureSide || channels < 1)
-        throw InvalidInput(field, "'" + path + "': unsupported size " + std::to_string(width) + "×" +
-                                      std::to_string(height) + "×" + std::to_string(spec.nchannels));
-    std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
-    if (!input->read_image(0, 0, 0, channels, TypeDesc::FLOAT, pixels.data())) {
-        const std::string why = input->geterror();
-        throw InvalidInput(field, "'" + path + "': " + (why.empty() ? "read failed" : why));
-    }
-    input->close();
-    // Files store row 0 at the top; textures keep row 0 at the bottom (v = 0), like Blender.
-    const size_t row = static_cast<size_t>(width) * channels;
-    for (int y = 0; y < height / 2; ++y)
-        std::swap_ranges(pixels.begin() + y * row, pixels.begin() + (y + 1) * row, pixels.begin() + (height - 1 - y) * row);
-    // Two channels (grey + alpha): use the grey one.
-    if (channels == 2) {
-        std::vector<float> grey(static_cast<size_t>(width) * height);
-        for (size_t i = 0; i < grey.size(); ++i) grey[i] = pixels[2 * i];
-        return Texture(name, grey.data(), width, height, 1, space);
-    }
-    return Texture(name, pixels.data(), width, height, channels, space);
 }
 
 }  // namespace ps

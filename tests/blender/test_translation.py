@@ -51,13 +51,16 @@ def two_colour_image(name, left, right, size=8):
     return image
 
 
-@pytest.mark.parametrize("source", ["file", "pixels"])
-def test_texture_colour_lands_in_the_image(source, empty_scene, tmp_path, core):
+@pytest.mark.parametrize("source", ["file", "file-without-oiio", "pixels"])
+def test_texture_colour_lands_in_the_image(source, empty_scene, tmp_path, core, monkeypatch):
     """A plane textured half red, half (sRGB 0.5) grey under a white world of radiance 1 shows its albedo: the
     left half renders red, the right half the grey decoded from sRGB (0.214), through the file (OpenImageIO) or
-    through Blender's pixels."""
+    through Blender's pixels: of a generated image, or of the file's image when the core reads no files (the
+    extension's module, IMAGE_FILES False; test_extension.py renders this with the real one)."""
+    if source == "file-without-oiio":
+        monkeypatch.setattr(export.textures, "core_reads_image_files", lambda: False)
     image = two_colour_image("Halves", (1.0, 0.0, 0.0), (0.5, 0.5, 0.5))
-    if source == "file":
+    if source.startswith("file"):
         image.filepath_raw = str(tmp_path / "halves.png")
         image.file_format = 'PNG'
         image.save()

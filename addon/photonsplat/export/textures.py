@@ -3,8 +3,9 @@
 Cycles' Image Texture defaults are what the core does: UV coordinates from the render UV map, Linear
 (bilinear) interpolation, Repeat extension, flat projection, the image's straight colour. The image reaches the
 core either as a file path, read there with OpenImageIO, or, for packed, generated or otherwise file-less images,
-as Blender's own pixels. Colour spaces: 'sRGB' images are decoded with the sRGB curve, linear and non-colour
-data are used as stored; Blender's float buffers are already linear.
+as Blender's own pixels. A core without OpenImageIO (IMAGE_FILES False: the Blender extension's module) gets
+Blender's pixels for every image. Colour spaces: 'sRGB' images are decoded with the sRGB curve, linear and
+non-colour data are used as stored; Blender's float buffers are already linear.
 
 Anything else (another coordinate source, Closest or Cubic interpolation, Clip/Extend, box or sphere
 projection, image sequences, UDIM tiles, colour spaces other than sRGB/linear) is rendered the default way
@@ -30,6 +31,16 @@ class TextureRef:
     key: str               # one core texture per key
     color_space: str       # "sRGB" | "linear", as the core takes it
     path: str = None       # file to read with OpenImageIO; None: use the image's pixels
+
+
+def core_reads_image_files():
+    """Whether the compiled core reads image files itself: True for the build against Debian's libraries, False for
+    the Blender extension's module (no OpenImageIO), which then gets Blender's pixels for every image."""
+    try:
+        from .._core import IMAGE_FILES
+    except ImportError:            # no core at all: nothing will be rendered, pixels are the safe answer
+        return False
+    return bool(IMAGE_FILES)
 
 
 def texture_reference(node, notes):
@@ -58,7 +69,7 @@ def texture_reference(node, notes):
             notes.append(f"image '{image.name}': colour space {space_name} decoded as sRGB")
 
     path = None
-    if image.source in ('FILE', 'SEQUENCE') and image.packed_file is None:
+    if image.source in ('FILE', 'SEQUENCE') and image.packed_file is None and core_reads_image_files():
         candidate = bpy.path.abspath(image.filepath, library=image.library)
         if os.path.isfile(candidate):
             path = candidate

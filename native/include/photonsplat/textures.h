@@ -18,6 +18,8 @@ enum class ColorSpace {
 };
 ColorSpace color_space_from_string(const std::string& name);  // "sRGB" | "linear"; throws InvalidInput
 
+constexpr int kMaxTextureSide = 65536;  // texels per side, at most
+
 class Texture {
 public:
     // `pixels`: height × width × channels floats (1, 3 or 4 channels), row 0 at the BOTTOM of the image
@@ -42,7 +44,9 @@ private:
 };
 
 // Reads an image file with OpenImageIO (any format it knows: PNG, JPEG, EXR, TIFF, HDR...). Throws InvalidInput
-// naming `field` when the file is missing or unreadable.
+// naming `field` when the file is missing or unreadable, or when this build reads no image files
+// (image_files_supported() in image.h: the Blender extension's module, whose textures come as Blender's pixels).
+// Defined in src/variants/image_files.cpp or src/variants/no_image_files.cpp.
 Texture load_texture(const std::string& name, const std::string& path, ColorSpace space, const std::string& field);
 
 }  // namespace ps
