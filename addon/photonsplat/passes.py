@@ -11,8 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import compat
-
 
 @dataclass(frozen=True)
 class RenderPass:
@@ -72,6 +70,7 @@ def needs_components(view_layer):
 def write_passes(layer, components, width, height):
     """Writes every pass beyond Combined that the result layer has (the engine writes Combined as it goes).
     Core images have row 0 at the top; Blender's at the bottom. Returns the names written."""
+    from . import compat     # imports bpy: only here, so the pass table loads without Blender (tests/python)
     written = []
     for render_pass in PASSES:
         if not render_pass.source:
