@@ -53,6 +53,17 @@ double irradiance(const Light& light, const glm::vec3& x, const glm::vec3& n, in
     return sum / n_samples;
 }
 
+// The same on a side × side grid of (u1, u2) cell centres: deterministic, and precise where few samples carry light.
+double irradiance_grid(const Light& light, const glm::vec3& x, const glm::vec3& n, int side) {
+    double sum = 0.0;
+    for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j) {
+            const LightIncidence in = sample_light_incidence(light, x, (i + 0.5f) / side, (j + 0.5f) / side);
+            sum += in.value.x * std::max(0.0f, glm::dot(n, in.wi));
+        }
+    return sum / (static_cast<double>(side) * side);
+}
+
 TEST(Cycles4Lights, SpotWithoutCosineHasTheSmoothstepFalloffOnly) {
     // Blender's 75° spot with a small blend: 30° off the axis lies in the hard part of the cone.
     const float size = static_cast<float>(75.0 * kPi / 180.0), blend = 0.15f;
@@ -172,18 +183,46 @@ TEST(Cycles4Lights, SphereLightIrradianceIsThePointLawNearAndFar) {
     EXPECT_NEAR(irradiance(tiny, {0.0f, 0.0f, -100.0f}, {0.0f, 0.0f, 1.0f}, 1000) / (intensity / 1e4), 1.0, 1e-3);
 }
 
-TEST(Cycles4Lights, InsideASphereLightEverySurfaceGetsIOverRSquared) {
-    // The inner wall of radiance L = I/(πR²) all around: E = πL = I/R², whatever the surface's orientation, and
-    // for a spot too (Cycles 4.x applies no cone inside its sphere).
+TEST(Cycles4Lights, InsideASpherePointLightEverySurfaceGetsIOverRSquared) {
+    // The inner wall of radiance L = I/(πR²) all around: E = πL = I/R², whatever the surface's orientation.
     const float radius = 0.5f;
-    Light spot = spot_light(0.5f, 0.0f, false);
+    const Light light = sphere_point_light(radius, true);
+    for (const glm::vec3& n : {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(1, -2, 0.5f)), glm::vec3(0, 0, -1)}) {
+        const double e = irradiance(light, {0.1f, -0.2f, 0.15f}, n, 400000);
+        EXPECT_NEAR(e / (light.value.x / (radius * radius)), 1.0, 0.01);
+    }
+}
+
+// Inside a sphere spot Cycles 4.5 applies no cone, but its spot-light intersection is one-sided (the ray must head
+// towards the centre): from inside, the BSDF rays heading away never hit it, and a diffuse surface keeps only the
+// light samples' ½ MIS weight along those directions. E = I/R² (3 + cos β)/4, β between the normal and the
+// direction to the centre: the core gives those directions half the radiance.
+TEST(Cycles4Lights, InsideASphereSpotTheDirectionsAwayFromTheCentreBringHalf) {
+    const float radius = 0.5f;
+    Light spot = spot_light(0.5f, 0.0f, false);  // a narrow cone: none of it applies inside
     spot.radius = radius;
     spot.sphere = true;
-    for (const Light& light : {sphere_point_light(radius, true), spot}) {
-        for (const glm::vec3& n : {glm::vec3(0, 0, 1), glm::normalize(glm::vec3(1, -2, 0.5f))}) {
-            const double e = irradiance(light, {0.1f, -0.2f, 0.15f}, n, 400000);
-            EXPECT_NEAR(e / (light.value.x / (radius * radius)), 1.0, 0.01) << to_string(light.kind);
-        }
+    spot.position = {0.1f, 0.2f, -0.1f};
+    const glm::vec3 x(0.2f, -0.1f, 0.15f);
+    const glm::vec3 to_centre = glm::normalize(spot.position - x);
+    for (const glm::vec3& n : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::normalize(glm::vec3(1, -2, 0.5f)),
+                               to_centre, -to_centre}) {
+        const double e = irradiance(spot, x, n, 400000);
+        const double expected = spot.value.x / (radius * radius) * (3.0 + glm::dot(n, to_centre)) / 4.0;
+        EXPECT_NEAR(e / expected, 1.0, 0.01) << "cos β = " << glm::dot(n, to_centre);
+    }
+    // Each direction: the full I/(πR²) towards the centre's side, half of it away, as a BSDF ray finds it too.
+    Rng rng(4, RngDomain::camera, 0);
+    const double full = spot.value.x / (kPi * radius * radius);
+    for (int i = 0; i < 500; ++i) {
+        const LightIncidence in = sample_light_incidence(spot, x, rng.uniform(), rng.uniform());
+        const double expected = glm::dot(in.wi, spot.position - x) > 0.0f ? full : 0.5 * full;
+        EXPECT_NEAR(in.value.x * in.pdf / expected, 1.0, 1e-5);
+        const LightHit h = intersect_light(spot, x, in.wi);
+        ASSERT_TRUE(h.hit);
+        EXPECT_NEAR(h.radiance.x / expected, 1.0, 1e-5);
+        EXPECT_NEAR(h.pdf / in.pdf, 1.0, 1e-5);
+        EXPECT_NEAR(h.distance / in.distance, 1.0, 1e-5);
     }
 }
 
@@ -203,6 +242,51 @@ TEST(Cycles4Lights, FromInsideASphereEveryDirectionHitsItsWall) {
         EXPECT_NEAR(h.distance / in.distance, 1.0, 1e-5);
         EXPECT_NEAR(glm::length(x + in.distance * in.wi - light.position), light.radius, 1e-5f);
         EXPECT_NEAR(h.radiance.x / h.pdf / in.value.x, 1.0, 1e-5);
+    }
+}
+
+// What Cycles 4.5.15 renders (CPU, 1024 samples, no denoising, max bounces 0): a white diffuse plane z = 0 cut by,
+// or under, a sphere spot of radius 0.3 at (0, 0, h) pointing down, seen from above by an orthographic camera at
+// 400 × 400 pixels over 1 m; E / I = π × the mean pixel on the ring of radius ρ (± 0.1 % from the ring's pixels,
+// ~0.15 % lower than a point's value by the pixel filter where E falls steeply). Inside the sphere (d < 0.3) the
+// old model gave I/R², 11.11, everywhere.
+TEST(Cycles4Lights, SphereSpotMatchesCycles45OnAPlaneCuttingIt) {
+    struct Ring {
+        float h, size_degrees, blend, rho;
+        double cycles;  // E / I
+    };
+    const Ring rings[] = {
+        // 120°, centre 0.2 above the plane: (3 + cos β)/4 inside, per-ray cone outside.
+        {0.2f, 120.0f, 0.0f, 0.00f, 11.1110}, {0.2f, 120.0f, 0.0f, 0.10f, 10.8196},
+        {0.2f, 120.0f, 0.0f, 0.15f, 10.5555}, {0.2f, 120.0f, 0.0f, 0.20f, 10.2980},
+        {0.2f, 120.0f, 0.0f, 0.25f, 5.4762},  {0.2f, 120.0f, 0.0f, 0.30f, 3.5701},
+        {0.2f, 120.0f, 0.0f, 0.40f, 1.6299},
+        // 60°, centre 0.2 BELOW the plane, which faces away from it: half the light right above the centre, and
+        // the cone lights nothing outside the sphere.
+        {-0.2f, 60.0f, 0.0f, 0.00f, 5.5556}, {-0.2f, 60.0f, 0.0f, 0.10f, 5.8484},
+        {-0.2f, 60.0f, 0.0f, 0.15f, 6.1114}, {-0.2f, 60.0f, 0.0f, 0.20f, 6.3691},
+        {-0.2f, 60.0f, 0.0f, 0.30f, 0.0},
+        // 60° wholly above the plane (its sphere subtends more than the cone right below): the per-ray cone;
+        // at ρ = 0 exactly I sin²30° / R² = 2.7778.
+        {0.5f, 60.0f, 0.0f, 0.00f, 2.7778}, {0.5f, 60.0f, 0.0f, 0.15f, 2.2188},
+        {0.5f, 60.0f, 0.0f, 0.25f, 1.4686}, {0.5f, 60.0f, 0.0f, 0.35f, 0.8294},
+        // 60°, blend 0.3, centre 0.1 above the plane.
+        {0.1f, 60.0f, 0.3f, 0.15f, 9.8746}, {0.1f, 60.0f, 0.3f, 0.25f, 9.3656},
+        {0.1f, 60.0f, 0.3f, 0.35f, 0.2262},
+    };
+    for (const Ring& r : rings) {
+        Light spot = spot_light(static_cast<float>(r.size_degrees * kPi / 180.0), r.blend, false);
+        spot.radius = 0.3f;
+        spot.sphere = true;
+        spot.position = {0.0f, 0.0f, r.h};
+        const double e = irradiance_grid(spot, {r.rho, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 1000) / spot.value.x;
+        if (r.cycles == 0.0)
+            EXPECT_EQ(e, 0.0) << "h " << r.h << " rho " << r.rho;
+        else
+            std::printf("h %4.1f, %3.0f°, blend %.1f, rho %.2f: Cycles %.4f, ours %.4f, ratio %.4f\n", r.h,
+                        r.size_degrees, r.blend, r.rho, r.cycles, e, e / r.cycles);
+        if (r.cycles != 0.0)
+            EXPECT_NEAR(e / r.cycles, 1.0, 0.003) << "h " << r.h << " size " << r.size_degrees << " rho " << r.rho;
     }
 }
 

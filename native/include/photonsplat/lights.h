@@ -49,7 +49,9 @@ const char* to_string(LightKind kind);
 // Reflected radiance estimate = f_r · value · max(0, n·wi), with a shadow ray of length `distance` towards wi.
 // A sphere light is sampled uniformly over the cone it subtends. From inside the sphere (a receiver within
 // `radius` of its centre) it is sampled uniformly over all directions, each meeting the inner wall at radiance
-// I/(πR²) with no spot cone applied, as Cycles 4.x does there: finite, E = I/R² on any surface inside.
+// I/(πR²) with no spot cone applied, as Cycles 4.x does there: finite, E = I/R² on any surface inside a point
+// light. Inside a spot, as Cycles 4.5 renders a diffuse surface there, the directions leading away from the
+// centre's side bring half that: E = I/R² (3 + cos β)/4, β between the normal and the direction to the centre.
 struct LightIncidence {
     glm::vec3 wi;      // unit, from the receiving point towards the light
     float distance;    // to the sampled light point (infinity for a sun)
