@@ -20,5 +20,10 @@ rm -rf "$venv"
 mkdir -p "$root/build"
 /usr/bin/python3 -m venv "$venv" >&2
 # bpy pins numpy below 2; the module is built against Debian's numpy 1.24, whose C API numpy 1.26 keeps.
-"$python" -m pip install --quiet --disable-pip-version-check "bpy==$version" pytest >&2
+# pip's own chatter goes to a log, shown when the install fails.
+if ! "$python" -m pip install --quiet --disable-pip-version-check "bpy==$version" pytest >"$venv/pip.log" 2>&1; then
+  cat "$venv/pip.log" >&2
+  echo "bpy_venv.sh: could not install bpy==$version into $venv" >&2
+  exit 1
+fi
 echo "$python"

@@ -25,6 +25,37 @@ def use_photonsplat(scene, size, photons, **settings):
         setattr(scene.photonsplat, key, value)
 
 
+def use_cycles(scene, size, bounces, samples=256):
+    """Switch `scene` to Cycles on the CPU at size x size pixels: `samples` per pixel, no adaptive sampling,
+    no denoising (Debian's Blender has no OpenImageDenoise) or clamping, and `bounces` as the bounce limit."""
+    scene.render.resolution_x = scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    cycles = scene.cycles
+    cycles.device = 'CPU'
+    cycles.samples = samples
+    cycles.use_denoising = False
+    cycles.use_adaptive_sampling = False
+    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
+    cycles.max_bounces = cycles.diffuse_bounces = bounces
+    scene.render.engine = 'CYCLES'
+
+
+def emissive_plane(size, location, strength):
+    """A square plane of `size` at `location` whose material is an Emission shader of `strength` (white);
+    returns the object."""
+    bpy.ops.mesh.primitive_plane_add(size=size, location=location)
+    lamp = bpy.context.active_object
+    material = bpy.data.materials.new("Lamp")
+    enable_nodes(material)
+    tree = material.node_tree
+    tree.nodes.clear()
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = strength
+    tree.links.new(emission.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    lamp.data.materials.append(material)
+    return lamp
+
+
 def render_pixels(path):
     """Render the current scene with bpy.ops (as F12 does) into the OpenEXR file `path` and read it back.
 

@@ -5,7 +5,8 @@ Two ways, one per kind of Blender (scripts/blender_suite.sh runs both):
       BLENDER_USER_SCRIPTS=$PWD/build/blender TMPDIR=<scratch> blender -b --factory-startup -noaudio \
           --python-exit-code 1 --addons photonsplat --python tests/blender/run_pytest.py -- -q tests/blender
 - Blender as a Python module (the `bpy` wheel of 4.5 or 5.x in a virtual environment, scripts/bpy_venv.sh):
-      BLENDER_USER_SCRIPTS=$PWD/build/blender build/bpy-4.5.15/bin/python tests/blender/run_pytest.py -- -q tests/blender
+      BLENDER_USER_SCRIPTS=$PWD/build/blender build/bpy-4.5.15/bin/python tests/blender/run_pytest.py -- \
+          -q tests/blender
   The module has no command line, so this script does what `--factory-startup --addons photonsplat` does.
 
 Everything after `--` goes to pytest. The exit code is pytest's; "no tests collected" (5) is kept as a failure,

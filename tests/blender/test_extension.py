@@ -74,6 +74,8 @@ def test_zip_holds_the_manifest_the_package_the_module_and_its_libraries():
     assert manifest["id"] == "photonsplat" and manifest["type"] == "add-on"
     assert manifest["version"] == project_version()
     assert manifest["blender_version_min"] == "4.2.0"
+    # The module is CPython 3.11's: Blender 5.1 (Python 3.13) must refuse the package rather than fail to load it.
+    assert manifest["blender_version_max"] == "5.1.0"
     assert manifest["platforms"] == [PLATFORMS[platform.machine()].replace("_", "-")]
 
 

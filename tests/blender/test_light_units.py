@@ -17,7 +17,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import enable_nodes, open_scene, render_pixels, uniform_world, use_photonsplat
+from blender_helpers import emissive_plane, open_scene, render_pixels, uniform_world, use_cycles, use_photonsplat
 from photonsplat import compat, engine
 
 SIZE = 64
@@ -44,16 +44,7 @@ def place_light(scene, kind, location=(0.0, 0.0, 1.9), scale=(1.0, 1.0, 1.0), **
 
 def direct_light_ratio(scene, tmp_path, label):
     """Mean of Photon Splat's image over Cycles', both direct light only."""
-    scene.render.resolution_x = scene.render.resolution_y = SIZE
-    scene.render.resolution_percentage = 100
-    cycles = scene.cycles
-    cycles.device = 'CPU'
-    cycles.samples = 256
-    cycles.use_denoising = False                      # Debian's Blender has no OpenImageDenoise
-    cycles.use_adaptive_sampling = False
-    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
-    cycles.max_bounces = 0
-    scene.render.engine = 'CYCLES'
+    use_cycles(scene, SIZE, bounces=0)
     reference = render_pixels(tmp_path / "cycles.exr")[..., :3]
 
     use_photonsplat(scene, SIZE * SUPERSAMPLE, 20_000, max_bounces=0, direct_samples=16)
@@ -136,17 +127,7 @@ def test_cycles_4_light_settings_match(label, tmp_path, core):
 def test_emissive_mesh_matches_this_blenders_cycles(tmp_path, core):
     scene = open_scene("cornell_diffuse")
     bpy.data.objects.remove(bpy.data.objects["Light"])
-    bpy.ops.mesh.primitive_plane_add(size=0.5, location=(0.0, 0.0, 1.5))
-    lamp = bpy.context.active_object
-    lamp.visible_camera = False
-    material = bpy.data.materials.new("Lamp")
-    enable_nodes(material)
-    tree = material.node_tree
-    tree.nodes.clear()
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Strength"].default_value = 30.0
-    tree.links.new(emission.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    lamp.data.materials.append(material)
+    emissive_plane(0.5, (0.0, 0.0, 1.5), 30.0).visible_camera = False
     ratio = direct_light_ratio(scene, tmp_path, "emissive mesh")
     assert abs(ratio - 1.0) < BOUND
 

@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 import photonsplat
-from blender_helpers import render_pixels
+from blender_helpers import render_pixels, use_cycles
 
 SIZE = 32
 SAMPLES = 1024
@@ -22,19 +22,11 @@ BOUNCES = 16
 
 
 def render_cycles(scene, path):
-    scene.render.resolution_x = scene.render.resolution_y = SIZE
-    scene.render.resolution_percentage = 100
+    use_cycles(scene, SIZE, BOUNCES, samples=SAMPLES)
     cycles = scene.cycles
-    cycles.device = 'CPU'
-    cycles.samples = SAMPLES
-    cycles.use_denoising = False
-    cycles.use_adaptive_sampling = False
-    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
     cycles.light_sampling_threshold = 0.0
-    cycles.max_bounces = cycles.diffuse_bounces = BOUNCES
     cycles.pixel_filter_type = 'BOX'
     cycles.filter_width = 1.0
-    scene.render.engine = 'CYCLES'
     return np.flipud(render_pixels(path))         # Blender's rows are bottom-up; the core's top-down
 
 

@@ -11,7 +11,8 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import caustic_landing, enable_nodes, open_scene, pixel_of, render_pixels, use_photonsplat
+from blender_helpers import (caustic_landing, emissive_plane, enable_nodes, open_scene, pixel_of, render_pixels,
+                             use_cycles, use_photonsplat)
 from photonsplat import engine
 from scene_geometry import floor_ring
 
@@ -75,16 +76,7 @@ def test_caustic_under_the_glass_sphere(caustics_scene, tmp_path, core):
 def render_with_both(scene, tmp_path, size=64, bounces=8):
     """Render `scene` with Cycles (CPU, 256 samples, no denoising or clamping) and with Photon Splat at the
     same size and bounce limit. Returns both RGB images and both render times."""
-    scene.render.resolution_x = scene.render.resolution_y = size
-    scene.render.resolution_percentage = 100
-    cycles = scene.cycles
-    cycles.device = 'CPU'
-    cycles.samples = 256
-    cycles.use_denoising = False                      # Debian's Blender has no OpenImageDenoise
-    cycles.use_adaptive_sampling = False
-    cycles.sample_clamp_direct = cycles.sample_clamp_indirect = 0.0
-    cycles.max_bounces = cycles.diffuse_bounces = bounces
-    scene.render.engine = 'CYCLES'
+    use_cycles(scene, size, bounces)
     started = time.perf_counter()
     reference = render_pixels(tmp_path / "cycles.exr")[..., :3]
     cycles_seconds = time.perf_counter() - started
@@ -132,16 +124,7 @@ def test_brightness_matches_cycles(light, diffuse_scene, tmp_path, core):
 def test_emissive_mesh_matches_cycles(diffuse_scene, tmp_path, core):
     """Mesh emission (Emission shader, both faces) lights the box as brightly as in Cycles."""
     bpy.data.objects.remove(bpy.data.objects["Light"])
-    bpy.ops.mesh.primitive_plane_add(size=0.5, location=(0.0, 0.0, 1.5))
-    lamp = bpy.context.active_object
-    material = bpy.data.materials.new("Lamp")
-    enable_nodes(material)
-    tree = material.node_tree
-    tree.nodes.clear()
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Strength"].default_value = 30.0
-    tree.links.new(emission.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    lamp.data.materials.append(material)
+    emissive_plane(0.5, (0.0, 0.0, 1.5), 30.0)
     reference, ours, _, _ = render_with_both(diffuse_scene, tmp_path)
 
     # Compare away from the lamp itself: one sample per pixel (ours) and Cycles' antialiased pixel filter
