@@ -5,6 +5,8 @@ rest of the add-on asks this module instead of testing bpy.app.version itself, s
 is one edit here. Each entry says which version changed what.
 """
 
+import math
+
 import bpy
 
 VERSION = bpy.app.version
@@ -115,7 +117,6 @@ def _normalized(light):
 def point_intensity(light, rgb):
     """Intensity (W/sr) of a point or spot light of colour × power `rgb`: P / (4π). Without Normalize (4.x) a
     light of radius R is not divided by its surface: 4π R² times brighter (measured: 1.131× at R = 0.3)."""
-    import math
     scale = 1.0 / (4.0 * math.pi)
     radius = float(light.shadow_soft_size)
     if not _normalized(light):
@@ -137,11 +138,24 @@ def point_light_shape(light):
 
 def area_radiance(light, rgb, area):
     """Radiance (W/(sr m²)) of an area light of colour × power `rgb` and surface `area` (m², scale included)."""
-    import math
     if not CYCLES_4_LIGHTS:
         return tuple(c / (4.0 * area) for c in rgb)
     divisor = math.pi * (area if light.normalize else 1.0)
     return tuple(c / divisor for c in rgb)
+
+
+def light_panel_properties(light):
+    """The settings of `light` beyond colour, power, size and shape that this Blender's Cycles reads, for the
+    light panel: Temperature, Exposure, Normalize and Soft Falloff in 4.x (each changes the render: see
+    above); none in 3.4."""
+    if not CYCLES_4_LIGHTS:
+        return []
+    names = ["use_temperature", "temperature" if light.use_temperature else "color", "exposure"]
+    if light.type != 'SUN':
+        names.append("normalize")
+    if light.type in {'POINT', 'SPOT'}:
+        names.append("use_soft_falloff")
+    return names
 
 
 def spot_cone_follows_scale():

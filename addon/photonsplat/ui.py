@@ -167,7 +167,11 @@ class DATA_PT_photonsplat_light(DataBlockPanel, Panel):
         layout.row().prop(light, "type", expand=True)
         _property_split(layout)
         col = layout.column()
-        col.prop(light, "color")
+        extra = compat.light_panel_properties(light)     # Blender 4.x: Temperature, Exposure, Normalize...
+        if "color" not in extra and "temperature" not in extra:
+            col.prop(light, "color")
+        for name in extra:
+            col.prop(light, name)
         col.prop(light, "energy")
         if light.type in {'POINT', 'SPOT'}:
             col.prop(light, "shadow_soft_size", text="Radius")

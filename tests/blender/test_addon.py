@@ -3,7 +3,7 @@
 import bpy
 import pytest
 
-from photonsplat import engine, ui
+from photonsplat import compat, engine, ui
 
 
 def test_engine_is_registered():
@@ -122,6 +122,20 @@ def test_panels_draw(caustics_scene):
             assert draw(ui.DATA_PT_photonsplat_light, light=light).labels == []
             light.spread = 1.0                          # what the export approximates, the panel says
             assert any("spread" in text for text in draw(ui.DATA_PT_photonsplat_light, light=light).labels)
+    # Every light setting this Blender's Cycles reads is in the panel (Blender 4.x: Temperature, Exposure...).
+    for kind in ("POINT", "SPOT", "SUN", "AREA"):
+        bpy.data.lights["Light"].type = kind
+        light = bpy.data.lights["Light"]
+        props = draw(ui.DATA_PT_photonsplat_light, light=light).props
+        assert {"energy"} | set(compat.light_panel_properties(light)) <= set(props)
+        assert ("color" in props) != (getattr(light, "use_temperature", False))
+        if compat.CYCLES_4_LIGHTS:
+            assert {"exposure", "use_temperature"} <= set(props)
+            assert ("use_soft_falloff" in props) == (kind in ("POINT", "SPOT"))
+            light.use_temperature = True                  # the colour then comes from the temperature
+            props = draw(ui.DATA_PT_photonsplat_light, light=light).props
+            assert "temperature" in props and "color" not in props
+            light.use_temperature = False
     from types import SimpleNamespace
     assert not ui.DATA_PT_photonsplat_light.poll(SimpleNamespace(engine="PHOTONSPLAT", light=None))
     assert ui.DATA_PT_photonsplat_light.poll(SimpleNamespace(engine="PHOTONSPLAT", light=light))
