@@ -186,6 +186,15 @@ LightIncidence sample_disc_incidence(const Light& light, const glm::vec3& x, flo
     return out;
 }
 
+// Solid-angle density of the directions sample_sphere_incidence draws from x: uniform over the cone the sphere
+// subtends from outside it, over all directions from inside.
+float sphere_direction_pdf(const Light& light, const glm::vec3& x) {
+    const glm::vec3 to_centre = light.position - x;
+    const float d2 = glm::dot(to_centre, to_centre);
+    if (!(d2 > light.radius * light.radius)) return 1.0f / (4.0f * kPi);
+    return 1.0f / (2.0f * kPi * sphere_cone_one_minus_cos(light.radius, std::sqrt(d2)));
+}
+
 // A sphere light: uniform over the cone it subtends from x outside it; from inside, uniform over all directions
 // (finite: the inner wall's radiance over the whole sphere of directions, E = I/R² on any surface inside a point
 // light, less inside a spot: sphere_radiance).
@@ -193,16 +202,13 @@ LightIncidence sample_sphere_incidence(const Light& light, const glm::vec3& x, f
     LightIncidence out;
     const glm::vec3 to_centre = light.position - x;
     const float d2 = glm::dot(to_centre, to_centre);
-    const bool outside = d2 > light.radius * light.radius;
-    if (outside) {
+    if (d2 > light.radius * light.radius) {
         const float d = std::sqrt(d2);
-        const float one_minus_cos = sphere_cone_one_minus_cos(light.radius, d);
-        out.wi = sample_cone_one_minus_cos(to_centre / d, one_minus_cos, u1, u2);
-        out.pdf = 1.0f / (2.0f * kPi * one_minus_cos);
+        out.wi = sample_cone_one_minus_cos(to_centre / d, sphere_cone_one_minus_cos(light.radius, d), u1, u2);
     } else {
         out.wi = sample_uniform_sphere(u1, u2);
-        out.pdf = 1.0f / (4.0f * kPi);
     }
+    out.pdf = sphere_direction_pdf(light, x);
     out.distance = sphere_hit_distance(x, out.wi, light.position, light.radius);
     // A direction at the cone's edge may miss the sphere by rounding: it grazes it at its closest approach.
     if (!(out.distance >= 0.0f)) out.distance = glm::dot(to_centre, out.wi);
@@ -311,12 +317,7 @@ LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3
             if (is_sphere_light(light)) {
                 const float t = sphere_hit_distance(x, direction, light.position, light.radius);
                 if (!(t > 0.0f)) return out;
-                const glm::vec3 from_light = x - light.position;
-                const float d2 = glm::dot(from_light, from_light);
-                const float pdf = d2 > light.radius * light.radius
-                                      ? 1.0f / (2.0f * kPi * sphere_cone_one_minus_cos(light.radius, std::sqrt(d2)))
-                                      : 1.0f / (4.0f * kPi);
-                out = {true, t, sphere_radiance(light, x, direction), pdf};
+                out = {true, t, sphere_radiance(light, x, direction), sphere_direction_pdf(light, x)};
                 return out;
             }
             // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²) (a spot's
