@@ -1,6 +1,7 @@
 // The Python face of the native core: numpy arrays and plain values in, numpy arrays and dicts out.
 // Thin on purpose: validation of meaning lives in the core; here we only check that arrays have the shape
 // and kind promised, and name the field when they do not.
+#include <algorithm>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -44,6 +45,81 @@ py::object render(const ps::Scene& scene, const ps::Camera& camera, const ps::Re
 
 }  // namespace
 
+namespace {
+
+// A dict's value for `key`, or nullptr when absent.
+py::handle dict_item(const py::dict& d, const char* key) {
+    return d.contains(key) ? py::handle(d[key]) : py::handle();
+}
+
+uint32_t factor_bits(const py::handle& indices, const std::string& field) {
+    uint32_t bits = 0;
+    for (const py::handle& item : py::iterable(py::reinterpret_borrow<py::object>(indices))) {
+        const long j = py::cast<long>(item);
+        if (j < 0 || j >= ps::kMaxFactors)
+            throw ps::InvalidInput(field, "factor indices must be in [0, " + std::to_string(ps::kMaxFactors) + ")");
+        bits |= 1u << j;
+    }
+    return bits;
+}
+
+std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& field) {
+    std::vector<ps::Closure> out;
+    if (obj.is_none()) return out;
+    size_t i = 0;
+    for (const py::handle& item : py::iterable(obj)) {
+        const std::string where = field + "[" + std::to_string(i++) + "]";
+        if (!py::isinstance<py::dict>(item)) throw ps::InvalidInput(where, "must be a dict");
+        const py::dict d = py::reinterpret_borrow<py::dict>(item);
+        static const char* const kKeys[] = {"kind", "distribution", "fresnel", "color", "specular_color", "roughness",
+                                            "alpha_x", "alpha_y", "ior", "texture", "texture_target", "factors_on",
+                                            "factors_off"};
+        for (const auto& [key, value] : d) {
+            const std::string k = py::str(key);
+            if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
+                throw ps::InvalidInput(where, "unknown key '" + k + "'");
+        }
+        ps::Closure c;
+        if (auto v = dict_item(d, "kind")) c.kind = ps::closure_kind_from_string(py::cast<std::string>(v));
+        else throw ps::InvalidInput(where + ".kind", "is required");
+        if (auto v = dict_item(d, "distribution")) c.distribution = ps::distribution_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "fresnel")) c.fresnel = ps::fresnel_kind_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "color")) c.color = vec3(py::reinterpret_borrow<py::object>(v), where + ".color");
+        if (auto v = dict_item(d, "specular_color"))
+            c.specular_color = vec3(py::reinterpret_borrow<py::object>(v), where + ".specular_color");
+        if (auto v = dict_item(d, "roughness")) c.roughness = py::cast<float>(v);
+        if (auto v = dict_item(d, "alpha_x")) c.alpha_x = py::cast<float>(v);
+        if (auto v = dict_item(d, "alpha_y")) c.alpha_y = py::cast<float>(v);
+        if (auto v = dict_item(d, "ior")) c.ior = py::cast<float>(v);
+        if (auto v = dict_item(d, "texture")) c.texture = py::cast<int32_t>(v);
+        if (auto v = dict_item(d, "texture_target"))
+            c.texture_target = ps::texture_target_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "factors_on")) c.factors_on = factor_bits(v, where + ".factors_on");
+        if (auto v = dict_item(d, "factors_off")) c.factors_off = factor_bits(v, where + ".factors_off");
+        out.push_back(c);
+    }
+    return out;
+}
+
+std::vector<ps::MixFactor> factor_list(const py::object& obj, const std::string& field) {
+    std::vector<ps::MixFactor> out;
+    if (obj.is_none()) return out;
+    size_t i = 0;
+    for (const py::handle& item : py::iterable(obj)) {
+        const std::string where = field + "[" + std::to_string(i++) + "]";
+        if (!py::isinstance<py::dict>(item)) throw ps::InvalidInput(where, "must be a dict");
+        const py::dict d = py::reinterpret_borrow<py::dict>(item);
+        ps::MixFactor f;
+        if (auto v = dict_item(d, "kind")) f.kind = ps::factor_kind_from_string(py::cast<std::string>(v));
+        else throw ps::InvalidInput(where + ".kind", "is required");
+        if (auto v = dict_item(d, "value")) f.value = py::cast<float>(v);
+        out.push_back(f);
+    }
+    return out;
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_core, m) {
     m.doc() = "Photon Splat native core: scene, camera, render settings and render().";
     m.attr("__version__") = "0.1.0";
@@ -70,24 +146,40 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
-               const py::object& emission, float roughness, int texture, bool holdout) {
+               const py::object& emission, float roughness, int texture, bool holdout, const py::object& closures,
+               const py::object& factors) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
-                mat.color = vec3(color, "material '" + name + "'.color");
+                const std::string where = "material '" + name + "'";
+                mat.color = vec3(color, where + ".color");
                 mat.ior = ior;
-                mat.emission = vec3(emission, "material '" + name + "'.emission");
+                mat.emission = vec3(emission, where + ".emission");
                 mat.roughness = roughness;  // validated by the core: finite, in [0, 1]
                 mat.texture = texture;      // validated by the scene: -1 or an existing texture
                 mat.holdout = holdout;
+                if (mat.kind == ps::MaterialKind::closures) {
+                    mat.closures = closure_list(closures, where + ".closures");
+                    mat.factors = factor_list(factors, where + ".factors");
+                } else if (!closures.is_none() || !factors.is_none()) {
+                    throw ps::InvalidInput(where + ".closures", "closures and factors need kind='closures'");
+                }
                 return s.add_material(mat);
             },
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
             "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f, "texture"_a = -1, "holdout"_a = false,
-            "Adds a material ('diffuse', 'mirror', 'glass' or 'glossy'); returns its index for material_ids. "
-            "roughness (glossy only, Blender's, in [0, 1]): GGX with alpha = roughness^2; <= 0.05 is a mirror. "
-            "texture: index of add_texture() whose colour at the hit's UV replaces color (-1: none). "
-            "holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
+            "closures"_a = py::none(), "factors"_a = py::none(),
+            "Adds a material; returns its index for material_ids. kind 'diffuse', 'mirror', 'glass' or 'glossy' is a "
+            "simple material from color, ior, roughness (glossy only, Blender's, in [0, 1]: GGX with alpha = "
+            "roughness^2; <= 0.05 is a mirror) and texture (index of add_texture() whose colour at the hit's UV "
+            "replaces color, -1: none). kind 'closures' takes `closures`, a list of dicts (kind: diffuse, "
+            "principled_diffuse, translucent, reflection, refraction, transparent, sheen, velvet; distribution: sharp, "
+            "ggx, beckmann, multi_ggx, gtr1; fresnel: none, principled, dielectric, schlick; color (the weight), "
+            "specular_color, roughness, alpha_x, alpha_y, ior, texture, texture_target ('color' or "
+            "'specular_color'), factors_on and factors_off: indices into `factors`), and `factors`, a list of dicts "
+            "(kind: fresnel, layer_fresnel, layer_facing; value: the IOR or Blend) whose value at each hit "
+            "multiplies a closure's weight (factors_on) or 1 - it (factors_off). emission: radiance W/(sr m^2) "
+            "from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,

@@ -44,7 +44,7 @@ std::vector<SpecularTarget> specular_targets(const Scene& scene) {
             looked[inst.mesh] = true;
             const MeshData& mesh = scene.meshes()[inst.mesh];
             for (size_t t = 0; t < mesh.triangle_count(); ++t)
-                if (scene.materials()[mesh.materials[t]].is_specular())
+                if (scene.materials()[mesh.materials[t]].has_delta)
                     for (int c = 0; c < 3; ++c) specular_vertices[inst.mesh].push_back(mesh.positions[mesh.indices[3 * t + c]]);
         }
         if (!specular_vertices[inst.mesh].empty()) instances.push_back(i);

@@ -9,7 +9,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "photonsplat/brdf.h"
+#include "photonsplat/lights.h"
+#include "photonsplat/materials.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
@@ -45,7 +46,150 @@ StrataGrid strata_grid(int n) {
     return {n, 1};
 }
 
+constexpr float kInvPi = 0.318309886183790671538f;
+
+bool is_black(const glm::vec3& v) { return v.x <= 0.0f && v.y <= 0.0f && v.z <= 0.0f; }
+
+// The view sample's stored reflection parts as a BSDF (the transmission parts went on along the camera path).
+Bsdf bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes) {
+    Bsdf b;
+    b.n = s.shading_normal;
+    b.ng = s.normal;
+    b.wo = s.wo;
+    b.lambert = s.albedo;
+    if (s.flags & kGlossy) {
+        b.lobe_count = static_cast<int>(std::min<uint32_t>(s.lobe_count, kMaxLobes));
+        for (int k = 0; k < b.lobe_count; ++k) b.lobes[k] = lobes[s.lobe_begin + static_cast<uint32_t>(k)];
+    }
+    return b;
+}
+
 }  // namespace
+
+float power_heuristic(float chosen, float other) {
+    if (!(other > 0.0f)) return 1.0f;
+    const float a = chosen * chosen, b = other * other;
+    return std::isfinite(a + b) ? a / (a + b) : (chosen >= other ? 1.0f : 0.0f);
+}
+
+bool scene_has_transparency(const Scene& scene) {
+    for (const Material& m : scene.materials())
+        if (m.transparent) return true;
+    return false;
+}
+
+glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, bool transparency) {
+    const RayTracer& tracer = scene.ray_tracer();
+    if (!transparency) return tracer.occluded(ray, 0.0f, t_max, kShadowRays) ? glm::vec3(0.0f) : glm::vec3(1.0f);
+    // Step through the surfaces on the way, multiplying their transparent weights (Cycles' transparent shadows,
+    // up to its default of 8 transparent bounces... we allow more: the loop ends at the first opaque surface).
+    constexpr int kMaxCrossings = 64;
+    glm::vec3 transmittance(1.0f);
+    Ray r = ray;
+    float remaining = t_max;
+    for (int k = 0; k < kMaxCrossings; ++k) {
+        Hit hit;
+        if (!tracer.intersect(r, 0.0f, remaining, hit, kShadowRays)) return transmittance;
+        const SurfacePoint s = surface_at(scene, r, hit);
+        if (!s.material->transparent) return glm::vec3(0.0f);
+        const Bsdf b = shade(scene, s, -r.direction);
+        transmittance *= glm::min(b.transparent, glm::vec3(1.0f));
+        if (is_black(transmittance)) return glm::vec3(0.0f);
+        remaining -= hit.t;
+        r.origin = offset_ray_origin(s.position, -s.geometric_normal, s.rounding_scale);
+        if (!(remaining > 0.0f)) return transmittance;
+    }
+    return glm::vec3(0.0f);
+}
+
+glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
+                          LobeSet set, Rng& rng, uint64_t& rays) {
+    const Scene& scene = c.scene;
+    const LightSources& sources = c.sources;
+    const int samples_per_light = c.samples_per_light;
+    const bool transparency = c.transparency;
+    const bool transmission = set == LobeSet::transmission;
+    const glm::vec3 side = transmission ? -b.ng : b.ng;  // light must arrive on this side of the surface
+    const bool mis = transmission || b.directional();
+    const glm::vec3 origin = offset_ray_origin(x, side, rounding_scale);
+    glm::vec3 sum(0.0f);
+    bool any_area = false;
+    for (size_t l = 0; l < sources.size(); ++l) {
+        const bool delta = sources.is_delta(l);
+        any_area = any_area || !delta;
+        const int n = delta ? 1 : samples_per_light;
+        const StrataGrid grid = strata_grid(n);
+        glm::vec3 light_sum(0.0f);
+        for (int k = 0; k < n; ++k) {
+            float u1 = rng.uniform(), u2 = rng.uniform();
+            const float u3 = rng.uniform();
+            grid.place(k, u1, u2);
+            const LightIncidence in = sources.sample_incidence(l, x, side, u1, u2, u3);
+            if (!(glm::dot(in.wi, side) > 0.0f) || is_black(in.value)) continue;
+            const float cos_shading = std::fabs(glm::dot(in.wi, b.n));
+            // The shading normal only weights the light; on the reflection side it must agree with the geometric.
+            if (!transmission && !(glm::dot(in.wi, b.n) > 0.0f)) continue;
+            // The uniform world is sampled cosine-weighted, which is the Lambert part's own sampling: light
+            // samples take that part (weight 1), the BSDF's directions below take the lobes (weight 1).
+            const bool world = sources.is_world(l);
+            const glm::vec3 f = (mis && !world) ? bsdf_eval(b, in.wi, set)
+                                                : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
+            if (is_black(f)) continue;
+            ++rays;
+            // Stop just short of the light's own point so the light's surroundings still shadow it.
+            const glm::vec3 t = shadow_transmittance(scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), transparency);
+            if (is_black(t)) continue;
+            const float w = (delta || !mis || world) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set));
+            light_sum += f * in.value * t * (cos_shading * w);
+        }
+        sum += light_sum / static_cast<float>(n);
+    }
+    if (!mis || !any_area) return sum;
+
+    // The BSDF's own directions, each adding the first emitter it meets, weighted against light sampling.
+    const RayTracer& tracer = scene.ray_tracer();
+    const int m = std::max(1, samples_per_light);
+    glm::vec3 bsdf_sum(0.0f);
+    const StrataGrid probe_grid = strata_grid(m);
+    for (int k = 0; k < m; ++k) {
+        const float u0 = rng.uniform();
+        float u1 = rng.uniform(), u2 = rng.uniform();
+        probe_grid.place(k, u1, u2);
+        const BsdfSample bs = bsdf_sample_set(b, set, u0, u1, u2);
+        if (bs.kind != ScatterKind::lobes || !(glm::dot(bs.direction, side) > 0.0f)) continue;
+        ++rays;
+        const Ray ray{origin, bs.direction};
+        Hit hit;
+        const bool found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays);
+        for (size_t l = 0; l < sources.size(); ++l) {
+            const Light* light = sources.light(l);
+            if (!light || sources.is_delta(l)) continue;
+            const LightHit h = intersect_light(*light, x, bs.direction);
+            if (!h.hit || (found && !(h.distance < hit.t))) continue;
+            bsdf_sum += bs.weight * h.radiance * power_heuristic(bs.pdf, h.pdf);
+        }
+        if (found) {
+            const Material& material =
+                scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]];
+            if (!is_black(material.emission) && !material.holdout) {
+                const glm::vec3 y = ray.origin + hit.t * ray.direction;
+                const float p_light = sources.emissive_pdf(hit.instance, hit.triangle, x, y);
+                if (p_light > 0.0f) bsdf_sum += bs.weight * material.emission * power_heuristic(bs.pdf, p_light);
+            }
+        } else {
+            // The world: the lobes' part only (light sampling took Lambert's), f_lobes·cos / pdf.
+            glm::vec3 lobes_weight = bs.weight;
+            if (!transmission) {
+                const float cos_n = glm::dot(bs.direction, b.n);
+                if (cos_n > 0.0f) lobes_weight -= b.lambert * (kInvPi * cos_n / bs.pdf);
+                lobes_weight = glm::max(lobes_weight, glm::vec3(0.0f));
+            }
+            for (size_t l = 0; l < sources.size(); ++l)
+                if (sources.is_world(l)) bsdf_sum += lobes_weight * scene.background();
+        }
+    }
+    return sum + bsdf_sum / static_cast<float>(m);
+}
 
 std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
@@ -54,8 +198,7 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
     std::vector<glm::vec3> out(samples.samples.size(), glm::vec3(0.0f));
     const LightSources sources(scene);
     if (sources.size() == 0 || samples.samples.empty()) return out;
-    const RayTracer& tracer = scene.ray_tracer();
-    const float inv_pi = 1.0f / 3.14159265358979323846f;
+    const DirectLightContext context{scene, sources, settings.samples_per_light, scene_has_transparency(scene)};
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> samples_done{0};
@@ -68,56 +211,11 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
         uint64_t rays = 0;
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
-            const glm::vec3 x = s.position + samples.origin;
-            // A pixel's second sample (the reflected branch at glass) draws its own numbers.
-            Rng rng(settings.seed, RngDomain::direct_light,
-                    uint64_t(s.pixel) + ((s.flags & kReflectedBranch) ? (uint64_t(1) << 32) : 0));
-            const bool glossy = (s.flags & kGlossy) != 0;
-            const glm::vec3 diffuse = s.albedo * inv_pi;
-            // Σ over lights of incident radiance × cos, weighted by the BRDF where it depends on the direction
-            // (glossy), or by nothing where it does not (a diffuse sample's ρ/π is applied once, at the end).
-            glm::vec3 sum(0.0f);
-            for (size_t l = 0; l < sources.size(); ++l) {
-                const int n = sources.is_delta(l) ? 1 : settings.samples_per_light;
-                const StrataGrid grid = strata_grid(n);
-                glm::vec3 light_sum(0.0f);
-                for (int k = 0; k < n; ++k) {
-                    float u1 = rng.uniform(), u2 = rng.uniform();
-                    const float u3 = rng.uniform();
-                    grid.place(k, u1, u2);
-                    if (glossy && sources.is_world(l)) {
-                        // A glossy lobe under the sky: the world's cosine-weighted directions would almost never
-                        // fall into a sharp lobe, so the lobe samples its own directions (weight f·cos/pdf), and
-                        // light sampling is kept for the diffuse part only (zero for a pure glossy surface).
-                        const GgxSample g = sample_ggx_reflection(s.specular, s.roughness, s.shading_normal, s.wo,
-                                                                  u1, u2);
-                        if (g.pdf > 0.0f && glm::dot(g.direction, s.normal) > 0.0f) {
-                            ++rays;
-                            const Ray ray{offset_ray_origin(x, s.normal, s.rounding_scale), g.direction};
-                            if (!tracer.occluded(ray, 0.0f, std::numeric_limits<float>::infinity(), kShadowRays))
-                                light_sum += g.weight * scene.background();
-                        }
-                        if (diffuse == glm::vec3(0.0f)) continue;
-                    }
-                    const LightIncidence in = sources.sample_incidence(l, x, s.normal, u1, u2, u3);
-                    // Light must arrive on the side the camera sees; the shading normal only weights it.
-                    if (!(glm::dot(in.wi, s.normal) > 0.0f)) continue;
-                    const float cos_shading = glm::dot(in.wi, s.shading_normal);
-                    if (!(cos_shading > 0.0f) || in.value == glm::vec3(0.0f)) continue;
-                    ++rays;
-                    const Ray shadow{offset_ray_origin(x, s.normal, s.rounding_scale), in.wi};
-                    // Stop just short of the light's own point so the light's surroundings still shadow it.
-                    if (tracer.occluded(shadow, 0.0f, in.distance * (1.0f - 1e-4f), kShadowRays)) continue;
-                    if (!glossy)
-                        light_sum += in.value * cos_shading;
-                    else if (sources.is_world(l))
-                        light_sum += in.value * cos_shading * diffuse;  // the glossy lobe was sampled above
-                    else
-                        light_sum += in.value * cos_shading * glm::vec3(sample_brdf(s, in.wi));
-                }
-                sum += light_sum / static_cast<float>(n);
-            }
-            out[i] = s.throughput * (glossy ? sum : diffuse * sum);
+            // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
+            Rng rng(settings.seed, RngDomain::direct_light, uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32));
+            const Bsdf b = bsdf_of(s, samples.lobes);
+            out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
+                                                    LobeSet::reflection, rng, rays);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

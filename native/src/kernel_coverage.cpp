@@ -144,7 +144,7 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     for (size_t i = count; i-- > 0;) first_sample[samples.samples[i].pixel] = static_cast<uint32_t>(i);
     const auto on_board = [&](size_t i) {
         const ViewSample& s = samples.samples[i];
-        return (s.flags & kReflectedBranch) || ((s.pixel % width) + (s.pixel / width)) % 2 == 0;
+        return first_sample[s.pixel] != i || ((s.pixel % width) + (s.pixel / width)) % 2 == 0;
     };
     std::atomic<uint64_t> probes{0};
     bool done = for_each_sample(count, control, [&](size_t i) {

@@ -103,6 +103,7 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
             out.distance = std::numeric_limits<float>::infinity();
             const float cos_n = glm::dot(out.wi, n);
             out.value = cos_n > 1e-6f ? scene_.background() * (kPi / cos_n) : glm::vec3(0.0f);
+            out.pdf = cos_n > 1e-6f ? cos_n / kPi : 0.0f;  // for MIS against BSDF sampling (direct_light.h)
             return out;
         }
     }

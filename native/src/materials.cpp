@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "photonsplat/errors.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/validation.h"
 
 namespace ps {
@@ -13,6 +14,7 @@ const char* to_string(MaterialKind kind) {
         case MaterialKind::mirror: return "mirror";
         case MaterialKind::glass: return "glass";
         case MaterialKind::glossy: return "glossy";
+        case MaterialKind::closures: return "closures";
     }
     return "?";
 }
@@ -22,19 +24,120 @@ MaterialKind material_kind_from_string(const std::string& name) {
     if (name == "mirror") return MaterialKind::mirror;
     if (name == "glass") return MaterialKind::glass;
     if (name == "glossy") return MaterialKind::glossy;
-    throw InvalidInput("material.kind", "must be 'diffuse', 'mirror', 'glass' or 'glossy', got '" + name + "'");
+    if (name == "closures") return MaterialKind::closures;
+    throw InvalidInput("material.kind",
+                       "must be 'diffuse', 'mirror', 'glass', 'glossy' or 'closures', got '" + name + "'");
 }
 
 void validate(const Material& m, const std::string& where) {
+    require_nonnegative_rgb(m.emission, where + ".emission");
+    if (m.kind == MaterialKind::closures) {
+        if (m.closures.size() > static_cast<size_t>(kMaxClosures))
+            throw InvalidInput(where + ".closures", "at most " + std::to_string(kMaxClosures) + " closures, got " +
+                                                        std::to_string(m.closures.size()));
+        if (m.factors.size() > static_cast<size_t>(kMaxFactors))
+            throw InvalidInput(where + ".factors", "at most " + std::to_string(kMaxFactors) + " factors, got " +
+                                                       std::to_string(m.factors.size()));
+        for (size_t j = 0; j < m.factors.size(); ++j)
+            validate(m.factors[j], where + ".factors[" + std::to_string(j) + "]");
+        int lobes = 0;
+        for (size_t i = 0; i < m.closures.size(); ++i) {
+            const Closure& c = m.closures[i];
+            validate(c, static_cast<int>(m.factors.size()), where + ".closures[" + std::to_string(i) + "]");
+            if (!c.is_delta() && !(c.kind == ClosureKind::diffuse && c.roughness == 0.0f)) ++lobes;
+        }
+        // shading.h keeps at most kMaxLobes evaluated lobes a hit (Lambert closures sum into one albedo).
+        if (lobes > kMaxLobes)
+            throw InvalidInput(where + ".closures", "at most " + std::to_string(kMaxLobes) +
+                                                        " non-delta closures other than Lambert diffuse, got " +
+                                                        std::to_string(lobes));
+        return;
+    }
     if (!is_finite(m.color) || m.color.x < 0 || m.color.y < 0 || m.color.z < 0 || m.color.x > 1 || m.color.y > 1 ||
         m.color.z > 1)
         throw InvalidInput(where + ".color", "each channel must be finite and in [0, 1]");
-    require_nonnegative_rgb(m.emission, where + ".emission");
     if (m.kind == MaterialKind::glass && !(std::isfinite(m.ior) && m.ior > 0.0f))
         throw InvalidInput(where + ".ior", "must be finite and > 0, got " + std::to_string(m.ior));
     // Checked for every kind (the default 0.5 is valid), so a bad value never waits for a kind change to bite.
     if (!(std::isfinite(m.roughness) && m.roughness >= 0.0f && m.roughness <= 1.0f))
         throw InvalidInput(where + ".roughness", "must be finite and in [0, 1], got " + std::to_string(m.roughness));
+}
+
+void lower_simple_material(Material& m) {
+    if (m.kind == MaterialKind::closures) {
+        finalize_material(m);
+        return;
+    }
+    m.closures.clear();
+    m.factors.clear();
+    Closure c;
+    c.texture = m.texture;
+    // A simple material's texture replaces its colour (the closures' texture multiplies: by 1 here).
+    const glm::vec3 color = m.texture >= 0 ? glm::vec3(1.0f) : m.color;
+    switch (m.kind) {
+        case MaterialKind::diffuse:
+            c.kind = ClosureKind::diffuse;
+            c.roughness = 0.0f;
+            c.color = color;
+            m.closures.push_back(c);
+            break;
+        case MaterialKind::mirror:
+        case MaterialKind::glossy: {
+            // A metal: Schlick's Fresnel from the tint (the texture replaces the tint), weight 1.
+            c.kind = ClosureKind::reflection;
+            c.fresnel = FresnelKind::schlick;
+            c.color = glm::vec3(1.0f);
+            c.specular_color = color;
+            c.texture_target = TextureTarget::specular_color;
+            const bool sharp = m.kind == MaterialKind::mirror || !(m.roughness > kGlossyMirrorRoughness);
+            c.distribution = sharp ? Distribution::sharp : Distribution::ggx;
+            c.alpha_x = c.alpha_y = sharp ? 0.0f : m.roughness * m.roughness;
+            m.closures.push_back(c);
+            break;
+        }
+        case MaterialKind::glass: {
+            // Cycles' Glass: a mirror weighted by the dielectric Fresnel of the view, the refraction by the rest
+            // (tinted). The one factor is that Fresnel.
+            m.factors.push_back(MixFactor{FactorKind::fresnel, m.ior});
+            Closure r;
+            r.kind = ClosureKind::reflection;
+            r.distribution = Distribution::sharp;
+            r.fresnel = FresnelKind::none;
+            r.color = glm::vec3(1.0f);
+            r.factors_on = 1u;
+            m.closures.push_back(r);
+            c.kind = ClosureKind::refraction;
+            c.distribution = Distribution::sharp;
+            c.color = color;
+            c.ior = m.ior;
+            c.factors_off = 1u;
+            m.closures.push_back(c);
+            break;
+        }
+        case MaterialKind::closures: break;
+    }
+    finalize_material(m);
+}
+
+void finalize_material(Material& m) {
+    m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = m.view_dependent = false;
+    m.anisotropic = m.textured = false;
+    for (const Closure& c : m.closures) {
+        if (c.color == glm::vec3(0.0f)) continue;  // weighs nothing anywhere
+        if (c.is_delta())
+            m.has_delta = true;
+        else
+            m.has_lobes = true;
+        if (!c.is_delta() && !(c.kind == ClosureKind::diffuse && c.roughness == 0.0f)) m.directional = true;
+        if (c.transmits()) m.transmits = true;
+        if (c.kind == ClosureKind::transparent) m.transparent = true;
+        if (c.factors_on != 0 || c.factors_off != 0) m.view_dependent = true;
+        if (!c.is_delta() && c.alpha_x != c.alpha_y &&
+            (c.kind == ClosureKind::reflection || c.kind == ClosureKind::refraction))
+            m.anisotropic = true;
+        if (c.texture >= 0) m.textured = true;
+    }
+    if (m.holdout) m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = false;
 }
 
 }  // namespace ps

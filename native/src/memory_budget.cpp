@@ -142,10 +142,15 @@ double predict_photon_map_bytes(const Scene& scene, uint64_t emitted, int max_bo
     double a = 0.0;
     bool specular = false;
     for (const Material& m : scene.materials()) {
-        if (m.is_specular())
-            specular = true;
-        else
-            a = std::max(a, m.is_glossy() ? 1.0 : double(std::max({m.color.x, m.color.y, m.color.z})));
+        if (m.has_delta) specular = true;
+        if (!m.has_lobes) continue;
+        if (m.directional || m.transmits || m.has_delta || m.textured) {
+            a = 1.0;  // lobes, mixes and textures: bounded by 1 only
+            continue;
+        }
+        glm::vec3 albedo(0.0f);
+        for (const Closure& c : m.closures) albedo += c.color;
+        a = std::max(a, double(std::max({albedo.x, albedo.y, albedo.z})));
     }
     a = std::min(a, 1.0);
     const double bounces = double(std::max(max_bounces, 0));
@@ -182,7 +187,7 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
     budget.reserve("direct_light", predict_per_sample_light_bytes(samples), "resolution");
     // Aimed photons (caustic_aim.h) store at most one photon each.
     bool specular = false;
-    for (const Material& m : scene.materials()) specular = specular || m.is_specular();
+    for (const Material& m : scene.materials()) specular = specular || m.has_delta;
     const double aimed = specular ? std::ceil(double(settings.aimed_photons) * double(settings.photons)) : 0.0;
     const double photon_map = predict_photon_map_bytes(scene, settings.photons, settings.max_bounces) +
                               aimed * double(sizeof(Photon));

@@ -16,6 +16,7 @@
 #include "photonsplat/emission_guide.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/materials.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
@@ -68,7 +69,11 @@ struct CausticWeighting {
     bool aimed = false;
 };
 
-// Follows one photon from its emission, appending what it stores to `out`.
+// Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
+// stored where the surface has reflection parts a view sample could hold (except at its first hit: direct
+// light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
+// that surviving photons keep about the power they arrived with. Only delta parts (mirrors, sharp refraction,
+// transparency) keep a path a caustic one: light → delta+ → stored.
 void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, int max_bounces, Rng& rng,
                 std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
     const RayTracer& tracer = scene.ray_tracer();
@@ -80,46 +85,32 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit);
         const Material& m = *s.material;
-        if (m.is_specular()) {
-            if (vertex == 0 && weighting.aim && !weighting.aimed)
-                caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
-            const SpecularStep step = scatter_specular(m, s, ray.direction, rng.uniform());
-            // Russian roulette on the tint keeps every surviving photon's power near the emitted one.
-            const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
-            if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-            power *= step.weight / keep;
-            const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-            ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
-            continue;
-        }
-        // Diffuse or glossy hit. The first one is direct light, which shadow rays already account for. A glossy
-        // bounce is not specular: like a diffuse one it ends the L S+ D prefix of caustic paths.
-        if (vertex > 0) {
+        if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
+        const Bsdf b = shade(scene, s, -ray.direction);
+        if (vertex > 0 && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far;
             out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
                                  caustic ? static_cast<uint32_t>(kCaustic) : 0u});
+            if (weighting.aimed) return;  // an aimed photon stands for caustics only
         }
-        if (weighting.aimed) return;  // an aimed photon stands for caustics only
-        only_specular_so_far = false;
-        if (m.is_glossy()) {
-            // Importance-sample the GGX lobe; its weight f·cos/pdf = F·G1 <= 1 is then played by Russian
-            // roulette, so surviving photons keep the power they arrived with (per channel, up to the tint).
-            const float v1 = rng.uniform(), v2 = rng.uniform();
-            const GlossyStep step = scatter_glossy(m, s, ray.direction, v1, v2);
-            if (!step.valid) return;
-            const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
-            if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-            power *= step.weight / keep;
-            ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), step.direction};
-            continue;
+        const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        const BsdfSample step = bsdf_sample(b, u0, u1, u2);
+        if (step.kind == ScatterKind::none) return;
+        if (step.kind == ScatterKind::lobes) {
+            if (weighting.aimed) return;
+            only_specular_so_far = false;
+        } else if (vertex == 0 && weighting.aim && !weighting.aimed) {
+            caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
         }
-        const float keep = std::max({s.color.x, s.color.y, s.color.z});
+        // Russian roulette on the weight keeps every surviving photon's power near the emitted one.
+        const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-        power *= s.color / keep;
-        const float v1 = rng.uniform(), v2 = rng.uniform();
-        const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
-        if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below the surface
-        ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
+        power *= step.weight / keep;
+        if (step.kind == ScatterKind::lobes && !(glm::dot(step.direction, step.transmitted ? -s.geometric_normal
+                                                                                            : s.geometric_normal) > 0.0f))
+            return;
+        const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
+        ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
     }
 }
 

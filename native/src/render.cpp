@@ -124,6 +124,10 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
         if (film.has(FilmOutput::depth)) film[FilmOutput::depth][p] = samples.first_depth[p];
     }
     std::vector<float> direct_image = pixel_sums(samples, direct, pixels);
+    // Direct light that reached the camera through rough transmission (view_samples.h) is direct light too.
+    if (!samples.transmitted_direct.empty())
+        for (size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < 3; ++c) direct_image[3 * p + c] += samples.transmitted_direct[p][c];
     std::vector<float> indirect_image = pixel_sums(samples, indirect, pixels);
     std::vector<float>& rgba = film[FilmOutput::combined];
     for (size_t p = 0; p < pixels; ++p) {
@@ -173,6 +177,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         view_settings.seed = seed;
         view_settings.jitter = iteration.index > 0;
         view_settings.max_specular_depth = settings.max_bounces;
+        view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
         reserve_split_samples(budget, settings, pixels, samples.samples.size());
 

@@ -7,7 +7,6 @@
 
 #include <glm/geometric.hpp>
 
-#include "photonsplat/brdf.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
@@ -51,14 +50,24 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
     s.geometric_normal = ng;
     s.shading_normal = ns;
     s.material = &scene.materials()[mesh.materials[t]];
-    s.color = s.material->color;
     s.rounding_scale = instance.rounding_scale;
-    if (s.material->holdout) {
-        s.color = glm::vec3(0.0f);  // absorbs whatever reaches it
-    } else if (s.material->texture >= 0) {
-        glm::vec2 uv(0.0f);
-        if (!mesh.uvs.empty()) uv = w * mesh.uvs[3 * t] + hit.u * mesh.uvs[3 * t + 1] + hit.v * mesh.uvs[3 * t + 2];
-        s.color = scene.textures()[s.material->texture].lookup(uv);
+    s.uv = glm::vec2(0.0f);
+    if (s.material->textured && !mesh.uvs.empty())
+        s.uv = w * mesh.uvs[3 * t] + hit.u * mesh.uvs[3 * t + 1] + hit.v * mesh.uvs[3 * t + 2];
+    s.tangent = glm::vec3(0.0f);
+    if (s.material->anisotropic) {
+        // Cycles' default tangent: radial about the object's Z axis, (−y, x, 0) in object space, carried to the
+        // world as a direction and made perpendicular to the shading normal.
+        const glm::vec3 p = w * p0 + hit.u * p1 + hit.v * p2;
+        glm::vec3 t_world = glm::mat3(instance.to_world) * glm::vec3(-p.y, p.x, 0.0f);
+        t_world -= ns * glm::dot(ns, t_world);
+        const float len = glm::length(t_world);
+        if (len > 1e-12f && std::isfinite(len)) {
+            s.tangent = t_world / len;
+        } else {  // on the axis itself: any tangent
+            glm::vec3 b2;
+            orthonormal_basis(ns, s.tangent, b2);
+        }
     }
     return s;
 }
@@ -115,78 +124,6 @@ glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, fl
     glm::vec3 b1, b2;
     orthonormal_basis(axis, b1, b2);
     return glm::normalize(sin_theta * std::cos(phi) * b1 + sin_theta * std::sin(phi) * b2 + cos_theta * axis);
-}
-
-// Unpolarised Fresnel reflectance of a smooth dielectric; cos_i > 0 on the incident side, eta = n_i / n_t.
-static float fresnel_dielectric(float cos_i, float eta, float& cos_t) {
-    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
-    if (sin2_t >= 1.0f) {
-        cos_t = 0.0f;
-        return 1.0f;  // total internal reflection
-    }
-    cos_t = std::sqrt(1.0f - sin2_t);
-    const float r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    const float r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5f * (r_s * r_s + r_p * r_p);
-}
-
-namespace {
-
-// What a glass surface does to a ray arriving along `direction`: both directions and the Fresnel reflectance
-// (1 under total internal reflection, when `refracted` is unused).
-struct GlassBranches {
-    glm::vec3 reflected, refracted;
-    float reflectance;
-};
-
-GlassBranches glass_branches(const Material& material, const SurfacePoint& surface, const glm::vec3& direction) {
-    const glm::vec3 n = surface.shading_normal;  // faces the incoming ray
-    const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
-    GlassBranches b;
-    b.reflected = glm::normalize(direction + 2.0f * cos_i * n);
-    // Entering the front face goes from air (1) into the material (ior); leaving goes back out.
-    const float eta = surface.entering ? 1.0f / material.ior : material.ior;
-    float cos_t = 0.0f;
-    b.reflectance = fresnel_dielectric(cos_i, eta, cos_t);
-    // Radiance's (n_t/n_i)² factor is left out: it cancels on the way in and out of closed objects.
-    b.refracted = b.reflectance < 1.0f ? glm::normalize(eta * direction + (eta * cos_i - cos_t) * n) : b.reflected;
-    return b;
-}
-
-}  // namespace
-
-SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
-                              float u) {
-    if (material.kind != MaterialKind::glass) {
-        // Mirror, or glossy smooth enough to be one: Fresnel-Schlick with the metal's tint as F0.
-        const glm::vec3 n = surface.shading_normal;
-        const float cos_i = std::clamp(-glm::dot(direction, n), 0.0f, 1.0f);
-        const float m = std::pow(1.0f - cos_i, 5.0f);
-        return {glm::normalize(direction + 2.0f * cos_i * n), surface.color + (glm::vec3(1.0f) - surface.color) * m,
-                false};
-    }
-    const GlassBranches b = glass_branches(material, surface, direction);
-    if (u < b.reflectance) return {b.reflected, glm::vec3(1.0f), false};
-    return {b.refracted, surface.color, true};
-}
-
-SpecularSplit split_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction) {
-    if (material.kind != MaterialKind::glass) return {scatter_specular(material, surface, direction, 0.0f), {}, false};
-    const GlassBranches b = glass_branches(material, surface, direction);
-    if (!(b.reflectance < 1.0f)) return {{b.reflected, glm::vec3(1.0f), false}, {}, false};
-    return {{b.reflected, glm::vec3(b.reflectance), false},
-            {b.refracted, (1.0f - b.reflectance) * surface.color, true},
-            true};
-}
-
-GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
-                          float u1, float u2) {
-    // As for view samples: a shading normal turned away from the arriving direction falls back to the geometric one.
-    const glm::vec3 n =
-        glm::dot(surface.shading_normal, -direction) > 1e-3f ? surface.shading_normal : surface.geometric_normal;
-    const GgxSample g = sample_ggx_reflection(surface.color, material.glossy_alpha(), n, -direction, u1, u2);
-    const bool valid = g.pdf > 0.0f && glm::dot(g.direction, surface.geometric_normal) > 0.0f;
-    return {g.direction, valid ? g.weight : glm::vec3(0.0f), valid};
 }
 
 }  // namespace ps

@@ -96,11 +96,18 @@ Scene::~Scene() = default;
 uint32_t Scene::add_material(const Material& material) {
     const std::string where = "material '" + material.name + "'";
     validate(material, where);
-    if (material.texture >= 0 && static_cast<size_t>(material.texture) >= textures_.size())
-        throw InvalidInput(where + ".texture", "is " + std::to_string(material.texture) + ", but the scene has " +
-                                                   std::to_string(textures_.size()) + " textures");
-    if (material.texture < -1) throw InvalidInput(where + ".texture", "must be -1 (none) or a texture index");
-    materials_.push_back(material);
+    const auto check_texture = [&](int32_t texture, const std::string& field) {
+        if (texture >= 0 && static_cast<size_t>(texture) >= textures_.size())
+            throw InvalidInput(field, "is " + std::to_string(texture) + ", but the scene has " +
+                                          std::to_string(textures_.size()) + " textures");
+        if (texture < -1) throw InvalidInput(field, "must be -1 (none) or a texture index");
+    };
+    check_texture(material.texture, where + ".texture");
+    for (size_t i = 0; i < material.closures.size(); ++i)
+        check_texture(material.closures[i].texture, where + ".closures[" + std::to_string(i) + "].texture");
+    Material lowered = material;
+    lower_simple_material(lowered);
+    materials_.push_back(std::move(lowered));
     return static_cast<uint32_t>(materials_.size() - 1);
 }
 

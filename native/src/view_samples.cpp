@@ -8,33 +8,43 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "photonsplat/direct_light.h"
+#include "photonsplat/light_sources.h"
+#include "photonsplat/lights.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/stats.h"
 
 namespace ps {
 
 size_t ViewSamples::bytes() const {
-    return samples.capacity() * sizeof(ViewSample) + emission.capacity() * sizeof(glm::vec3) +
+    return samples.capacity() * sizeof(ViewSample) + lobes.capacity() * sizeof(Lobe) +
+           transmitted_direct.capacity() * sizeof(glm::vec3) + emission.capacity() * sizeof(glm::vec3) +
            alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
            first_depth.capacity() * sizeof(float);
 }
 
 namespace {
 
-// Below this cosine between the shading normal and the viewer, a glossy sample shades with its geometric normal.
-constexpr float kMinGlossyCosine = 1e-3f;
-
-// Where a camera path stands between two vertices: the ray leaving the last one, the product of specular weights
-// so far and the number of specular bounces behind it.
+// Where a camera path stands between two vertices: the ray leaving the last one, the product of weights so far,
+// the number of bounces behind it, and what the emitters this ray may meet are weighted by.
 struct CameraPath {
     Ray ray;
     glm::vec3 throughput;
     int depth;
+    uint32_t branch = 0;       // which of its pixel's branches (ViewSample flags)
+    bool split_done = false;   // the pixel's one split (at the first surface with several parts) is behind
+    // The ray left a rough transmission sampled with density `lobe_pdf` at `lobe_x`, whose next-event estimation
+    // also reaches emitters: those met weigh by the power heuristic (else 1: nothing else could find them).
+    bool after_lobe = false;
+    glm::vec3 lobe_x{0.0f};
+    glm::vec3 lobe_side{0.0f};  // geometric normal on the side the ray left to
+    float lobe_pdf = 0.0f;
 };
 
 // What the first surface a pixel's camera ray hits tells its pixel (as Cycles' passes).
@@ -44,84 +54,192 @@ struct FirstHit {
     float depth = 0.0f;
 };
 
-// Follows a camera path through mirrors and glass. Returns true and fills `sample` at the first non-specular
-// (diffuse or glossy) hit; adds emission and background seen along the way to `emitted`. The first hit (depth 0)
-// fills `first` (left untouched when the ray escapes). At its first glass surface, if `branch` is not null and
-// the glass both reflects and refracts there, the path follows the refracted ray and leaves the reflected one,
-// with its Fresnel weight, in *branch: the pixel then averages both instead of one chosen at random, which
-// removes the speckle of glass (a reflection of the bright room in some pixels, the view through the glass in
-// their neighbours) that would otherwise take many passes to average out.
-bool trace_camera_path(const Scene& scene, const Camera& camera, CameraPath path, Rng& rng, int max_specular_depth,
-                       ViewSample& sample, glm::vec3& emitted, FirstHit& first, std::optional<CameraPath>* branch) {
+// Everything a pixel's camera paths need and fill.
+struct PixelPaths {
+    const Scene& scene;
+    const Camera& camera;
+    const ViewSampleSettings& settings;
+    const LightSources* sources;  // where the scene has rough transmission, delta surfaces or lights with a size
+    const DirectLightContext* direct;
+    uint32_t pixel;
+    Rng& rng;
+    std::vector<ViewSample>& found;
+    std::vector<Lobe>& found_lobes;
+    glm::vec3& emitted;
+    glm::vec3* transmitted_direct;  // null when the scene has no rough transmission
+    FirstHit& first;
+    std::vector<CameraPath> pending;  // branches started at the split, traced after the current path
+    uint32_t next_branch = 1;
+    uint64_t rays = 0;
+};
+
+float mis_weight(const CameraPath& path, float light_pdf) {
+    return path.after_lobe ? power_heuristic(path.lobe_pdf, light_pdf) : 1.0f;
+}
+
+// The view sample of b's reflection parts at surface s, reached by `path`.
+void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf& b,
+                     const glm::vec3& weight) {
+    ViewSample sample{};
+    sample.position = s.position;  // made camera-relative by the caller
+    sample.normal = b.ng;
+    sample.shading_normal = b.n;
+    sample.rounding_scale = s.rounding_scale;
+    sample.wo = b.wo;
+    sample.albedo = b.lambert;
+    sample.throughput = weight;
+    sample.pixel = p.pixel;
+    sample.flags = (path.depth > 0 ? kViaSpecular : 0u) | (std::min<uint32_t>(path.branch, 0xffu) << kBranchShift);
+    sample.depth = p.first.depth;
+    sample.lobe_begin = static_cast<uint32_t>(p.found_lobes.size());
+    sample.lobe_count = 0;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (is_transmission(b.lobes[k])) continue;
+        p.found_lobes.push_back(b.lobes[k]);
+        ++sample.lobe_count;
+    }
+    if (sample.lobe_count > 0) sample.flags |= kGlossy;
+    p.found.push_back(sample);
+}
+
+// A part of the BSDF at a camera path's vertex: a weight to choose it by and what it does.
+enum class Part { receive, transmission, mirror, refraction, transparent };
+
+// Follows one camera path (and returns when it ends in a view sample, is absorbed, escapes or is dropped),
+// adding emission, background and lights seen along the way to p.emitted. At the first surface whose BSDF has
+// more than one part (lobes, mirror, refraction, transparency, rough transmission), every part is followed:
+// the path ends there in the view sample of the lobes and each other part starts a branch of its own in
+// p.pending, weighted by its part; this removes the speckle of glass (the reflected room in some pixels, the
+// view through the glass in their neighbours) that a random choice would leave to many passes to average. At
+// later surfaces one part is chosen with probability in proportion to its weight.
+void trace_camera_path(PixelPaths& p, CameraPath path) {
+    const Scene& scene = p.scene;
     const RayTracer& tracer = scene.ray_tracer();
-    for (;; ++path.depth) {
+    for (;;) {  // each vertex; `path` becomes the first path going on from it (one bounce deeper)
         const Ray& ray = path.ray;
         Hit hit;
         // The first segment sees what is visible to the camera, up to its far clip; later ones what is visible
         // to indirect rays.
         const bool from_camera = path.depth == 0;
-        if (!tracer.intersect(ray, 0.0f,
-                              from_camera ? camera.far_distance(ray) : std::numeric_limits<float>::infinity(), hit,
-                              from_camera ? kCameraRays : kIndirectRays)) {
-            emitted += path.throughput * scene.background();
-            return false;
+        const bool found = tracer.intersect(ray, 0.0f,
+                                            from_camera ? p.camera.far_distance(ray)
+                                                        : std::numeric_limits<float>::infinity(),
+                                            hit, from_camera ? kCameraRays : kIndirectRays);
+        // Lights with a size, seen in mirrors, through glass and rough transmission (Cycles' camera rays do not
+        // see lights themselves).
+        if (!from_camera && p.sources != nullptr) {
+            for (size_t l = 0; l < p.sources->size(); ++l) {
+                const Light* light = p.sources->light(l);
+                if (light == nullptr || p.sources->is_delta(l)) continue;
+                const LightHit h = intersect_light(*light, path.after_lobe ? path.lobe_x : ray.origin, ray.direction);
+                if (!h.hit || (found && !(h.distance < hit.t))) continue;
+                p.emitted += path.throughput * h.radiance * mis_weight(path, h.pdf);
+            }
+        }
+        if (!found) {
+            // After a rough transmission the world was that vertex's next-event estimation's, by its BSDF probes
+            // alone (direct_light.h): not again here.
+            if (!path.after_lobe) p.emitted += path.throughput * scene.background();
+            return;
         }
         const SurfacePoint s = surface_at(scene, ray, hit);
         if (from_camera) {
-            if (s.material->holdout) return false;  // cut out: alpha stays 0, nothing is added
-            first.alpha = 1.0f;
-            first.depth = camera.view_depth(s.position);
-            first.normal = s.shading_normal;  // already on the side the camera ray came from
+            if (s.material->holdout) return;  // cut out: alpha stays 0, nothing is added
+            p.first.alpha = 1.0f;
+            p.first.depth = p.camera.view_depth(s.position);
+            p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
-        emitted += path.throughput * s.material->emission;
-        if (!s.material->is_specular()) {
-            sample.position = s.position;  // made camera-relative by the caller
-            sample.normal = s.geometric_normal;
-            sample.shading_normal = s.shading_normal;
-            sample.rounding_scale = s.rounding_scale;
-            sample.wo = -ray.direction;
-            sample.throughput = path.throughput;
-            sample.flags = path.depth > 0 ? kViaSpecular : 0u;
-            if (s.material->is_glossy()) {
-                // A pure GGX lobe (no diffuse part): F0 = colour, α = roughness².
-                sample.albedo = glm::vec3(0.0f);
-                sample.specular = s.color;
-                sample.roughness = s.material->glossy_alpha();
-                sample.flags |= kGlossy;
-                // Where interpolation tilts the shading normal away from the viewer (silhouettes of smooth
-                // meshes), the lobe would see ωo below its surface and reflect nothing: black rims. Use the
-                // geometric normal there, which always faces the viewer.
-                if (!(glm::dot(sample.shading_normal, sample.wo) > kMinGlossyCosine))
-                    sample.shading_normal = sample.normal;
-            } else {
-                sample.albedo = s.color;
-                sample.specular = glm::vec3(0.0f);
-                sample.roughness = 0.0f;
-            }
-            return true;
+        if (s.material->emission != glm::vec3(0.0f)) {
+            float w = 1.0f;
+            if (path.after_lobe && p.sources != nullptr)
+                w = mis_weight(path, p.sources->emissive_pdf(hit.instance, hit.triangle, path.lobe_x, s.position));
+            p.emitted += path.throughput * s.material->emission * w;
         }
-        if (path.depth >= max_specular_depth) return false;
-        SpecularStep step;
-        if (branch != nullptr && s.material->kind == MaterialKind::glass) {
-            const SpecularSplit split = split_specular(*s.material, s, ray.direction);
-            if (split.both) {
-                const glm::vec3 reflected = path.throughput * split.reflected.weight;
-                if (reflected.x > 0.0f || reflected.y > 0.0f || reflected.z > 0.0f)
-                    *branch = CameraPath{Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
-                                             split.reflected.direction},
-                                         reflected, path.depth + 1};
-                step = split.transmitted;
-            } else {
-                step = split.reflected;
-            }
-            branch = nullptr;  // one split per pixel at most
+        const Bsdf b = shade(scene, s, -ray.direction);
+
+        // The parts and their weights (luminance of what each scatters, roughly).
+        float weight[5] = {0.0f, 0.0f, luminance(b.mirror), luminance(b.refraction), luminance(b.transparent)};
+        weight[0] = luminance(b.lambert);
+        for (int k = 0; k < b.lobe_count; ++k)
+            weight[is_transmission(b.lobes[k]) ? 1 : 0] += lobe_sampling_weight(b.lobes[k], b.n, b.wo);
+        int parts = 0;
+        float total = 0.0f;
+        for (float& w : weight) {
+            if (!(w > 0.0f) || !std::isfinite(w)) w = 0.0f;
+            parts += w > 0.0f ? 1 : 0;
+            total += w;
+        }
+        if (parts == 0) return;  // absorbed
+        const bool split = parts > 1 && p.settings.split_at_glass && !path.split_done;
+        if (split) path.split_done = true;
+        // Which parts go on from here, each with the factor its throughput is divided by (its probability).
+        bool take[5] = {false, false, false, false, false};
+        float probability[5] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+        if (split) {
+            for (int k = 0; k < 5; ++k) take[k] = weight[k] > 0.0f;
+        } else if (parts == 1) {
+            for (int k = 0; k < 5; ++k) take[k] = weight[k] > 0.0f;
         } else {
-            step = scatter_specular(*s.material, s, ray.direction, rng.uniform());
+            float pick = p.rng.uniform() * total;
+            int chosen = 4;
+            for (int k = 0; k < 5; ++k) {
+                if (weight[k] > 0.0f && pick < weight[k]) {
+                    chosen = k;
+                    break;
+                }
+                pick -= weight[k];
+            }
+            while (!(weight[chosen] > 0.0f)) --chosen;  // rounding at the end of the range
+            take[chosen] = true;
+            probability[chosen] = weight[chosen] / total;
         }
-        path.throughput *= step.weight;
-        if (path.throughput.x <= 0.0f && path.throughput.y <= 0.0f && path.throughput.z <= 0.0f) return false;
-        const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-        path.ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
+        const bool can_continue = path.depth < p.settings.max_specular_depth;
+        // Paths that go on from this vertex, the first of which continues this loop.
+        CameraPath next[4];
+        int next_count = 0;
+        const auto go_on = [&](const glm::vec3& direction, const glm::vec3& w, bool transmitted, bool lobe,
+                               float lobe_pdf) {
+            const glm::vec3 t = path.throughput * w;
+            if (!(t.x > 0.0f || t.y > 0.0f || t.z > 0.0f) || !can_continue) return;
+            const glm::vec3 side = transmitted ? -s.geometric_normal : s.geometric_normal;
+            CameraPath n = path;
+            n.depth = path.depth + 1;
+            n.ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), direction};
+            n.throughput = t;
+            n.after_lobe = lobe;
+            n.lobe_x = s.position;
+            n.lobe_side = side;
+            n.lobe_pdf = lobe_pdf;
+            next[next_count++] = n;
+        };
+        if (take[0]) add_view_sample(p, path, s, b, path.throughput / probability[0]);
+        const bool sampled_here = take[0];
+        // Refraction first, mirror last: a pixel split at glass keeps its refracted path, the reflected one branches.
+        if (take[3]) {
+            glm::vec3 d;
+            if (refraction_direction(b, d)) go_on(d, b.refraction / probability[3], true, false, 0.0f);
+        }
+        if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, 0.0f);
+        if (take[1]) {
+            // Rough transmission: its own next-event estimation here, then a sampled direction on.
+            const glm::vec3 t = path.throughput / probability[1];
+            if (p.direct != nullptr && p.transmitted_direct != nullptr)
+                *p.transmitted_direct +=
+                    t * direct_light_at(*p.direct, b, s.position, s.rounding_scale, LobeSet::transmission, p.rng, p.rays);
+            const float u0 = p.rng.uniform(), u1 = p.rng.uniform(), u2 = p.rng.uniform();
+            const BsdfSample bs = bsdf_sample_set(b, LobeSet::transmission, u0, u1, u2);
+            if (bs.kind == ScatterKind::lobes)
+                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true, bs.pdf);
+        }
+        if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false, 0.0f);
+        if (next_count == 0) return;
+        // Every sample of a pixel needs its own branch number (its random numbers in later stages).
+        if (sampled_here) next[0].branch = p.next_branch++;
+        for (int k = 1; k < next_count; ++k) {
+            next[k].branch = p.next_branch++;
+            p.pending.push_back(next[k]);
+        }
+        path = next[0];
     }
 }
 
@@ -143,11 +261,30 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     out.first_normal.assign(pixels, glm::vec3(0.0f));
     out.first_depth.assign(pixels, 0.0f);
 
-    // Each band of rows collects its samples (up to two a pixel) in pixel order; the bands are joined in order,
-    // so the result does not depend on which thread traced which band.
+    // Lights seen along camera paths need the light sources where a path can bounce (delta surfaces, rough
+    // transmission); next-event estimation at rough transmissions needs them too, and a buffer for what it finds.
+    bool bounces = false, rough_transmission = false;
+    for (const Material& m : scene.materials()) {
+        bounces = bounces || m.has_delta || m.transmits;
+        rough_transmission = rough_transmission || (m.transmits && m.has_lobes);
+    }
+    std::optional<LightSources> sources;
+    std::optional<DirectLightContext> direct;
+    if (bounces) sources.emplace(scene);
+    if (rough_transmission) {
+        out.transmitted_direct.assign(pixels, glm::vec3(0.0f));
+        direct.emplace(DirectLightContext{scene, *sources, settings.samples_per_light, scene_has_transparency(scene)});
+    }
+    const LightSources* sources_ptr = sources ? &*sources : nullptr;
+    const DirectLightContext* direct_ptr = direct ? &*direct : nullptr;
+
+    // Each band of rows collects its samples (one or more a pixel) and their lobes in pixel order; the bands are
+    // joined in order, so the result does not depend on which thread traced which band.
     constexpr int kBandRows = 8;
     const int bands = (height + kBandRows - 1) / kBandRows;
     std::vector<std::vector<ViewSample>> band_samples(static_cast<size_t>(bands));
+    std::vector<std::vector<Lobe>> band_lobes(static_cast<size_t>(bands));
+    std::atomic<uint64_t> extra_rays{0};
     scene.ray_tracer();  // build the BVH once, before the threads need it
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> rows_done{0};
@@ -159,6 +296,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             }
             // Collected here (a band's worth of memory per thread), then copied to a vector of exactly their size.
             std::vector<ViewSample> found;
+            std::vector<Lobe> found_lobes;
+            uint64_t rays = 0;
             const int y_end = std::min(height, (band + 1) * kBandRows);
             found.reserve(static_cast<size_t>(y_end - band * kBandRows) * static_cast<size_t>(width));
             for (int y = band * kBandRows; y < y_end; ++y) {
@@ -173,42 +312,50 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                     }
                     const CameraPath start{
                         camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy), glm::vec3(1.0f), 0};
-                    ViewSample sample;
-                    sample.pixel = static_cast<uint32_t>(pixel);
                     FirstHit first;
-                    std::optional<CameraPath> reflected;
-                    if (trace_camera_path(scene, camera, start, rng, settings.max_specular_depth, sample,
-                                          out.emission[pixel], first, settings.split_at_glass ? &reflected : nullptr)) {
-                        sample.depth = first.depth;
-                        sample.position -= out.origin;
-                        found.push_back(sample);
+                    const size_t before = found.size();
+                    PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel), rng,
+                                     found, found_lobes, out.emission[pixel],
+                                     out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel], first,
+                                     {}, 1, 0};
+                    trace_camera_path(paths, start);
+                    while (!paths.pending.empty()) {
+                        const CameraPath branch = paths.pending.front();
+                        paths.pending.erase(paths.pending.begin());
+                        trace_camera_path(paths, branch);
                     }
-                    if (reflected && trace_camera_path(scene, camera, *reflected, rng, settings.max_specular_depth,
-                                                       sample, out.emission[pixel], first, nullptr)) {
-                        sample.depth = first.depth;
-                        sample.position -= out.origin;
-                        sample.flags |= kReflectedBranch;
-                        found.push_back(sample);
-                    }
+                    rays += paths.rays;
+                    for (size_t k = before; k < found.size(); ++k) found[k].position -= out.origin;
                     out.alpha[pixel] = first.alpha;
                     out.first_normal[pixel] = first.normal;
                     out.first_depth[pixel] = first.depth;
                 }
             }
             band_samples[static_cast<size_t>(band)].assign(found.begin(), found.end());
+            band_lobes[static_cast<size_t>(band)] = std::move(found_lobes);
+            extra_rays += rays;
             control.advance(rows_done += static_cast<uint64_t>(y_end - band * kBandRows),
                             static_cast<uint64_t>(height));
         }
     });
     control.check();
 
-    size_t count = 0;
-    for (const std::vector<ViewSample>& found : band_samples) count += found.size();
-    out.samples.reserve(count);
-    for (std::vector<ViewSample>& found : band_samples) {
-        out.samples.insert(out.samples.end(), found.begin(), found.end());
-        std::vector<ViewSample>().swap(found);
+    size_t count = 0, lobe_count = 0;
+    for (size_t band = 0; band < band_samples.size(); ++band) {
+        count += band_samples[band].size();
+        lobe_count += band_lobes[band].size();
     }
+    out.samples.reserve(count);
+    out.lobes.reserve(lobe_count);
+    for (size_t band = 0; band < band_samples.size(); ++band) {
+        const uint32_t offset = static_cast<uint32_t>(out.lobes.size());
+        for (ViewSample& sample : band_samples[band]) sample.lobe_begin += offset;
+        out.samples.insert(out.samples.end(), band_samples[band].begin(), band_samples[band].end());
+        out.lobes.insert(out.lobes.end(), band_lobes[band].begin(), band_lobes[band].end());
+        std::vector<ViewSample>().swap(band_samples[band]);
+        std::vector<Lobe>().swap(band_lobes[band]);
+    }
+    if (extra_rays.load() > 0) stats.counters["shadow_rays"] += static_cast<double>(extra_rays.load());
     stats.counters["view_samples"] += static_cast<double>(count);
     stats.bytes["view_samples"] = static_cast<double>(out.bytes());
     return out;

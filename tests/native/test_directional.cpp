@@ -155,9 +155,7 @@ TEST(Directional, SingleSampleNodesAtLevelZeroEqualBrute) {
         s.throughput = glm::vec3(0.5f + u(rng));
         s.wo = glm::normalize(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, 1.0f));
         if (i % 3 == 0) {
-            s.flags |= kGlossy;
-            s.specular = glm::vec3(0.9f, 0.7f, 0.5f);
-            s.roughness = 0.2f;
+            add_glossy_lobe(vs, s, glm::vec3(0.9f, 0.7f, 0.5f), 0.2f);
         }
         vs.samples.push_back(s);
     }

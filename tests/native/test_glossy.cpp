@@ -31,6 +31,14 @@ Material glossy_material(const char* name, glm::vec3 color, float roughness) {
     return m;
 }
 
+Material lowered(Material m) {
+    lower_simple_material(m);
+    return m;
+}
+
+// The GGX α of a glossy view sample's lobe (the simple glossy kind lowers to one lobe).
+float alpha_of(const ViewSamples& samples, const ViewSample& s) { return samples.lobes[s.lobe_begin].alpha_x; }
+
 // A unit direction at polar angle theta from n (azimuth phi around it).
 glm::vec3 direction_around(const glm::vec3& n, double theta, double phi) {
     glm::vec3 b1, b2;
@@ -260,11 +268,11 @@ TEST(GgxLobe, ImportanceAndUniformSamplingAgreeOnTheReflectedEnergy) {
 TEST(GlossyMaterial, SmoothGlossyIsAMirrorAndRoughnessIsValidated) {
     EXPECT_EQ(material_kind_from_string("glossy"), MaterialKind::glossy);
     EXPECT_STREQ(to_string(MaterialKind::glossy), "glossy");
-    EXPECT_TRUE(glossy_material("g", glm::vec3(1.0f), 0.05f).is_specular());
-    EXPECT_FALSE(glossy_material("g", glm::vec3(1.0f), 0.05f).is_glossy());
-    EXPECT_TRUE(glossy_material("g", glm::vec3(1.0f), 0.06f).is_glossy());
-    EXPECT_FALSE(glossy_material("g", glm::vec3(1.0f), 0.06f).is_specular());
-    EXPECT_FLOAT_EQ(glossy_material("g", glm::vec3(1.0f), 0.5f).glossy_alpha(), 0.25f);
+    EXPECT_TRUE(lowered(glossy_material("g", glm::vec3(1.0f), 0.05f)).is_specular());
+    EXPECT_FALSE(lowered(glossy_material("g", glm::vec3(1.0f), 0.05f)).has_lobes);
+    EXPECT_TRUE(lowered(glossy_material("g", glm::vec3(1.0f), 0.06f)).has_lobes);
+    EXPECT_FALSE(lowered(glossy_material("g", glm::vec3(1.0f), 0.06f)).is_specular());
+    EXPECT_FLOAT_EQ(lowered(glossy_material("g", glm::vec3(1.0f), 0.5f)).closures[0].alpha_x, 0.25f);
     for (float bad : {std::nanf(""), -1.0f, 2.0f, INFINITY}) {
         try {
             validate(glossy_material("shiny", glm::vec3(1.0f), bad), "material 'shiny'");
@@ -300,13 +308,14 @@ TEST(GlossyDirectLight, PointLightHighlightSitsAtTheMirrorPointAndMatchesTheBrdf
         const ViewSample& s = samples.samples[i];
         ASSERT_TRUE(s.flags & kGlossy);
         ASSERT_EQ(s.albedo, glm::vec3(0.0f));
-        ASSERT_FLOAT_EQ(s.roughness, 0.04f);
+        ASSERT_FLOAT_EQ(alpha_of(samples, s), 0.04f);
+        const Lobe& lobe = samples.lobes[s.lobe_begin];
         if (luminance(direct[i]) > luminance(direct[brightest])) brightest = i;
         // Each sample: I · cosθ / d² · f_r, the BRDF evaluated for the light's direction.
         const glm::vec3 x = s.position + samples.origin, to_light = light.position - x;
         const float d2 = glm::dot(to_light, to_light);
         const glm::vec3 wi = to_light / std::sqrt(d2);
-        const glm::vec3 expected = light.value * wi.z / d2 * ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo);
+        const glm::vec3 expected = light.value * wi.z / d2 * ggx_reflection(lobe.specular_color, lobe.alpha_x, s.shading_normal, wi, s.wo);
         for (int c = 0; c < 3; ++c)
             worst = std::max(worst, double(std::fabs(direct[i][c] - expected[c])) / (expected[c] + 1e-3));
     }
@@ -343,8 +352,8 @@ TEST(GlossyDirectLight, RoughPlaneUnderAUniformSkyReflectsItsDirectionalAlbedo) 
         const ViewSample& s = samples.samples[i];
         rendered += glm::dvec3(direct[i]);
         for (int c = 0; c < 3; ++c)
-            expected[c] += integrate_over_reflections(s.roughness, s.shading_normal, s.wo, [&](const glm::vec3& wi) {
-                return double(ggx_reflection(f0, s.roughness, s.shading_normal, wi, s.wo)[c]) * wi.z;
+            expected[c] += integrate_over_reflections(alpha_of(samples, s), s.shading_normal, s.wo, [&](const glm::vec3& wi) {
+                return double(ggx_reflection(f0, alpha_of(samples, s), s.shading_normal, wi, s.wo)[c]) * wi.z;
             }, 200);
     }
     for (int c = 0; c < 3; ++c) {
@@ -370,7 +379,7 @@ TEST(GlossyDirectLight, SharpLobeUnderTheSkyIsSampledByTheLobe) {
     double squared_error = 0.0, worst = 0.0;
     for (size_t i = 0; i < samples.samples.size(); ++i) {
         const ViewSample& s = samples.samples[i];
-        albedo[i] = directional_albedo(f0, s.roughness, s.shading_normal, s.wo, 0, 200);
+        albedo[i] = directional_albedo(f0, alpha_of(samples, s), s.shading_normal, s.wo, 0, 200);
         const double error = direct[i].x / (2.0 * albedo[i]) - 1.0;
         squared_error += error * error;
         worst = std::max(worst, std::fabs(error));
@@ -518,10 +527,8 @@ TEST(GlossyRender, SplatEvaluatesTheLobePerPhotonDirection) {
     s.position = glm::vec3(0.0f);
     s.normal = s.shading_normal = glm::vec3(0, 0, 1);
     s.wo = glm::normalize(glm::vec3(-1, 0, 1));
-    s.specular = glm::vec3(0.9f, 0.6f, 0.3f);
-    s.roughness = 0.09f;
     s.throughput = glm::vec3(1.0f);
-    s.flags = kGlossy;
+    test::add_glossy_lobe(samples, s, glm::vec3(0.9f, 0.6f, 0.3f), 0.09f);
     samples.samples.push_back(s);
     samples.emission.assign(1, glm::vec3(0.0f));
     samples.alpha.assign(1, 1.0f);
@@ -531,7 +538,7 @@ TEST(GlossyRender, SplatEvaluatesTheLobePerPhotonDirection) {
     for (int k = 0; k < 10; ++k) {
         const glm::vec3 wi = glm::normalize(glm::vec3(0.2f * k - 0.5f, 0.05f * k, 1.0f));
         photons.photons.push_back(Photon{glm::vec3(0.001f * k, 0, 0), wi, glm::vec3(0, 0, 1), glm::vec3(1.0f + k), 0});
-        expected += glm::dvec3(ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo)) * (1.0 + k);
+        expected += glm::dvec3(ggx_reflection(glm::vec3(0.9f, 0.6f, 0.3f), 0.09f, s.shading_normal, wi, s.wo)) * (1.0 + k);
     }
     SplatParams params;
     params.radius = 0.1f;
@@ -542,8 +549,8 @@ TEST(GlossyRender, SplatEvaluatesTheLobePerPhotonDirection) {
     expected /= kPi * 0.01 * 10.0;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(out[0][c], expected[c], 1e-5 * expected[c]);
     // And the photon aligned with the mirror direction dominates a photon from straight above.
-    EXPECT_GT(luminance(glm::vec3(sample_brdf(s, glm::normalize(glm::vec3(1, 0, 1))))),
-              10.0f * luminance(glm::vec3(sample_brdf(s, glm::vec3(0, 0, 1)))));
+    EXPECT_GT(luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::normalize(glm::vec3(1, 0, 1))))),
+              10.0f * luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::vec3(0, 0, 1)))));
 }
 
 // Five spheres of roughness 0.05 (a mirror) to 0.8 on a diffuse floor: everything finite and non-negative.

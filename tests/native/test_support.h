@@ -137,6 +137,60 @@ inline std::pair<float, glm::vec3> nearest_plane(const std::vector<Plane>& plane
     return {t_best, glm::dot(n_best, dir) < 0.0f ? n_best : -n_best};
 }
 
+// Gives s directional lobes, stored in vs.lobes: a GGX reflection (Schlick tint) always, and by `pick` one more
+// closure of each other reflection kind in turn (Beckmann, anisotropic GGX, multiscatter GGX, clearcoat, sheen,
+// velvet, Oren–Nayar, principled diffuse), so that the exactness suites meet every closure a view sample holds.
+inline void add_glossy_lobe(ViewSamples& vs, ViewSample& s, const glm::vec3& f0, float alpha) {
+    Lobe l;
+    l.kind = ClosureKind::reflection;
+    l.distribution = Distribution::ggx;
+    l.fresnel = FresnelKind::schlick;
+    l.weight = glm::vec3(1.0f);
+    l.specular_color = f0;
+    l.alpha_x = l.alpha_y = alpha;
+    if (!(s.flags & kGlossy)) {
+        s.lobe_begin = static_cast<uint32_t>(vs.lobes.size());
+        s.lobe_count = 0;
+    }
+    vs.lobes.push_back(l);
+    ++s.lobe_count;
+    s.flags |= kGlossy;
+}
+
+inline void add_random_lobes(ViewSamples& vs, ViewSample& s, float u1, float u2, float pick) {
+    add_glossy_lobe(vs, s, glm::vec3(0.04f + 0.5f * u1), 0.05f + 0.5f * u2);
+    Lobe l;
+    l.weight = glm::vec3(0.3f + 0.5f * u2, 0.4f, 0.2f + 0.5f * u1);
+    l.alpha_x = l.alpha_y = 0.1f + 0.6f * u1;
+    l.roughness = u2;
+    l.eta = 1.5f;
+    switch (static_cast<int>(pick * 9.0f)) {
+        case 0: l.kind = ClosureKind::reflection; l.distribution = Distribution::beckmann; break;
+        case 1:
+            l.kind = ClosureKind::reflection;
+            l.alpha_y = 0.5f * l.alpha_x;
+            l.tangent = glm::normalize(glm::cross(s.shading_normal, glm::vec3(0.3f, 0.5f, 0.8f)));
+            break;
+        case 2: l.kind = ClosureKind::reflection; l.distribution = Distribution::multi_ggx; break;
+        case 3:
+            l.kind = ClosureKind::reflection;
+            l.distribution = Distribution::gtr1;
+            l.fresnel = FresnelKind::dielectric;
+            break;
+        case 4: l.kind = ClosureKind::sheen; break;
+        case 5: l.kind = ClosureKind::velvet; break;
+        case 6: l.kind = ClosureKind::diffuse; break;
+        case 7: l.kind = ClosureKind::principled_diffuse; break;
+        default:
+            l.kind = ClosureKind::reflection;
+            l.fresnel = FresnelKind::principled;
+            l.specular_color = glm::vec3(0.9f, 0.6f, 0.3f);
+            break;
+    }
+    vs.lobes.push_back(l);
+    ++s.lobe_count;
+}
+
 // A pinhole camera at `origin` looking down −z at a few planes: a sample per covered pixel on the nearest plane,
 // with random albedo.
 inline ViewSamples synthetic_view_samples(const SyntheticOptions& o, std::mt19937& rng) {
@@ -166,10 +220,10 @@ inline ViewSamples synthetic_view_samples(const SyntheticOptions& o, std::mt1993
                 s.normal = s.shading_normal = random_unit(rng);
                 s.throughput = glm::vec3(0.2f + u(rng), 0.2f + u(rng), 0.2f + u(rng));
             }
-            if ((o.draws_glossy || o.glossy_fraction > 0.0) && u(rng) < o.glossy_fraction) {
-                s.flags |= kGlossy;
-                s.specular = glm::vec3(0.04f + 0.5f * u(rng));
-                s.roughness = 0.05f + 0.5f * u(rng);
+            if ((o.draws_glossy || o.glossy_fraction > 0.0) && u(rng) < o.glossy_fraction)
+            {
+                const float u1 = u(rng), u2 = u(rng), pick = u(rng);
+                add_random_lobes(vs, s, u1, u2, pick);
             }
             vs.samples.push_back(s);
         }

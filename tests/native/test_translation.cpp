@@ -11,6 +11,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/stats.h"
 #include "photonsplat/view_samples.h"
 #include "test_scenes.h"
@@ -134,7 +135,8 @@ TEST(Textures, SurfaceColourComesFromTheTextureAtTheHitsUv) {
     auto colour_at = [&](float x, float y) {
         Hit hit;
         EXPECT_TRUE(scene.ray_tracer().intersect(down_at(x, y), 0.0f, 100.0f, hit));
-        return surface_at(scene, down_at(x, y), hit).color;
+        const Ray ray = down_at(x, y);
+        return shade(scene, surface_at(scene, ray, hit), -ray.direction).lambert;
     };
     // UV (0.25, 0.25) is the red texel's centre: quad point (-0.25, -0.25).
     EXPECT_NEAR(colour_at(-0.25f, -0.25f).x, 1.0f, 1e-4f);

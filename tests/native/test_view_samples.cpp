@@ -45,12 +45,12 @@ TEST(ViewSamples, GlassSplitsCameraPathsIntoFresnelWeightedBranches) {
         // A second sample of a pixel is always its reflected branch (the refracted one comes first, when its
         // path did not escape or end); both came off glass.
         const bool second = per_pixel[s.pixel] == 2;
-        if (second) EXPECT_TRUE(s.flags & kReflectedBranch) << "pixel " << s.pixel;
-        if (s.flags & kReflectedBranch) EXPECT_TRUE(s.flags & kViaSpecular) << "pixel " << s.pixel;
+        if (second) EXPECT_NE(branch_of(s.flags), 0u) << "pixel " << s.pixel;
+        if (branch_of(s.flags) != 0) EXPECT_TRUE(s.flags & kViaSpecular) << "pixel " << s.pixel;
         if (!second) continue;
         ++split_pixels;
         const ViewSample& refracted = split.samples[i - 1];
-        EXPECT_FALSE(refracted.flags & kReflectedBranch) << "pixel " << s.pixel;
+        EXPECT_EQ(branch_of(refracted.flags), 0u) << "pixel " << s.pixel;
         EXPECT_TRUE(refracted.flags & kViaSpecular);
         EXPECT_EQ(refracted.depth, s.depth) << "both branches key their clusters by the pixel's first hit";
         // Clear glass: F + (1 − F) = 1 where neither branch met the tinted mirror afterwards; never more.
@@ -68,7 +68,7 @@ TEST(ViewSamples, GlassSplitsCameraPathsIntoFresnelWeightedBranches) {
     // Without the split: one sample a pixel at most, as before.
     std::vector<int> single_count(per_pixel.size(), 0);
     for (const ViewSample& s : single.samples) {
-        EXPECT_EQ(s.flags & kReflectedBranch, 0u);
+        EXPECT_EQ(branch_of(s.flags), 0u);
         EXPECT_LE(++single_count[s.pixel], 1);
     }
 }
@@ -95,7 +95,7 @@ TEST(ViewSamples, SplitAtGlassKeepsTheMeanAndRemovesTheBranchNoise) {
             std::vector<double> image(pixels, 0.0);
             for (size_t i = 0; i < vs.samples.size(); ++i) {
                 image[vs.samples[i].pixel] += direct[i].x + direct[i].y + direct[i].z;
-                if (vs.samples[i].flags & kReflectedBranch) via_glass[vs.samples[i].pixel] = 1;
+                if (branch_of(vs.samples[i].flags) != 0) via_glass[vs.samples[i].pixel] = 1;
             }
             for (size_t p = 0; p < pixels; ++p) {
                 sum[mode][p] += image[p];

@@ -1,13 +1,20 @@
-// Stage 2 of the pipeline: direct light at every view sample by shadow rays (next-event estimation).
+// Stage 2 of the pipeline: direct light at every view sample by shadow rays (next-event estimation), with
+// multiple importance sampling against the BSDF's own directions where the BSDF is more than Lambert's.
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
+
+#include "photonsplat/camera.h"
+#include "photonsplat/shading.h"
 
 namespace ps {
 
 class Scene;
 class RenderControl;
+class LightSources;
+class Rng;
 struct Stats;
 struct ViewSamples;
 
@@ -20,5 +27,31 @@ struct DirectLightSettings {
 std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
                                             Stats& stats);
+
+// Direct light scattered by one set of a BSDF's parts at x (towards b.wo), throughput not included:
+//   - every source sampled `samples_per_light` times (once if it is a delta light), stratified, from the side
+//     of the surface the set scatters from (reflection: wo's side; transmission: the other);
+//   - where the set is directional (any lobe beyond Lambert's, or transmission), as many BSDF-sampled rays,
+//     each adding the emitter it meets first (a light with a size, an emissive triangle, the world), the two
+//     strategies weighted by the power heuristic. A Lambert-only set uses light sampling alone.
+// Shadow rays pass through transparent closures, attenuated (Cycles' transparent shadows). `rays` counts them.
+struct DirectLightContext {
+    const Scene& scene;
+    const LightSources& sources;
+    int samples_per_light;
+    bool transparency;  // scene_has_transparency(scene)
+};
+glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
+                          LobeSet set, Rng& rng, uint64_t& rays);
+
+// What reaches `ray.origin` from ray.origin + t_max·direction: 1, 0 behind an opaque surface, the product of
+// the transparent weights of the surfaces crossed where the scene has transparency (`transparency`).
+glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, bool transparency);
+
+// Whether any material of the scene has a transparent closure (shadow rays must then look through them).
+bool scene_has_transparency(const Scene& scene);
+
+// The power heuristic of multiple importance sampling (β = 2) for the strategy of density `chosen` against `other`.
+float power_heuristic(float chosen, float other);
 
 }  // namespace ps

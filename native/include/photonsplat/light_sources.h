@@ -36,7 +36,8 @@ public:
     }
 
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
-    // The returned pdf is set for scene lights and emissive surfaces; the world's cosine sampling leaves it 0.
+    // The returned pdf is the solid-angle density of wi (0 for a delta light); the world is sampled cosine-weighted
+    // about n.
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
                                     float u3) const;
     // A photon's starting ray and power. u1..u5 in [0, 1).

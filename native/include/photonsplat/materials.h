@@ -1,10 +1,15 @@
-// The few BSDFs the core supports. The add-on maps Blender's shader nodes onto these; anything else is
-// approximated there (and said so), never interpreted here.
+// A material: a weighted sum of closures (closures.h), as Cycles' shader nodes build one, plus its emission and
+// whether it is a holdout. The add-on lowers Blender's nodes to closures (export/materials.py); the core never
+// sees a node. For scripts and tests a material may instead name one of four simple kinds, which
+// lower_simple_material turns into closures when the material is added to a scene.
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
+
+#include "photonsplat/closures.h"
 
 namespace ps {
 
@@ -14,15 +19,18 @@ enum class MaterialKind {
     glass,    // smooth dielectric: Fresnel reflection, refraction tinted by color, total internal reflection
     glossy,   // GGX microfacet reflection (brdf.h), Fresnel-Schlick with F0 = color, α = roughness²; a perfect
               // mirror when roughness <= kGlossyMirrorRoughness
+    closures, // the closures listed in Material::closures, as exported
 };
 
-// Blender roughness at or below which a glossy surface is rendered as a perfect mirror (α <= 0.0025: visually
-// sharp in Cycles, and Cycles users expect such a surface to focus caustics).
+// Blender roughness at or below which a microfacet closure is rendered as a perfect mirror or refraction (α <=
+// 0.0025: visually sharp in Cycles, and Cycles users expect such a surface to focus caustics). The add-on turns
+// such closures into Distribution::sharp; the simple "glossy" kind does it here.
 constexpr float kGlossyMirrorRoughness = 0.05f;
 
 struct Material {
     std::string name;
     MaterialKind kind = MaterialKind::diffuse;
+    // The simple kinds' inputs (kind != closures), emission and holdout for every kind:
     glm::vec3 color{0.8f};     // diffuse albedo, mirror/glossy F0 tint, or glass transmission tint; each in [0, 1]
     float ior = 1.45f;         // glass only; > 0
     glm::vec3 emission{0.0f};  // emitted radiance W/(sr·m²), from both faces (Cycles' Emission convention)
@@ -30,18 +38,35 @@ struct Material {
     int32_t texture = -1;      // index into Scene::textures() whose lookup at the hit's UV replaces `color`; -1: none
     bool holdout = false;      // Cycles' Holdout: cut out of the image (alpha 0, black) where the camera sees it,
                                // an absorbing black surface for every other ray
+    // kind == closures, or filled by lower_simple_material:
+    std::vector<Closure> closures;   // at most kMaxClosures
+    std::vector<MixFactor> factors;  // at most kMaxFactors
 
-    // A glossy surface rough enough to be a lobe: a non-specular hit (view sample, stored photon).
-    bool is_glossy() const { return kind == MaterialKind::glossy && roughness > kGlossyMirrorRoughness; }
-    // Mirror, glass and near-smooth glossy: followed by scatter_specular, never a view sample or a photon.
-    bool is_specular() const { return kind != MaterialKind::diffuse && !is_glossy(); }
-    float glossy_alpha() const { return roughness * roughness; }
+    // Derived from the closures by finalize_material (Scene::add_material calls it):
+    bool has_delta = false;        // a sharp reflection, sharp refraction or transparent closure
+    bool has_lobes = false;        // a non-delta closure: the surface holds view samples and stores photons
+    bool directional = false;      // a non-delta closure other than Lambert diffuse: the BRDF depends on directions
+    bool transmits = false;        // a closure sends light to the other side
+    bool transparent = false;      // a transparent closure: shadow rays pass through, attenuated
+    bool view_dependent = false;   // a closure's weight depends on the direction (factors)
+    bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
+    bool textured = false;         // a closure reads a texture: hits need their UV
+
+    // Only delta closures: every path that reaches the surface goes on (no view sample, no photon stored).
+    bool is_specular() const { return has_delta && !has_lobes; }
 };
+
+constexpr int kMaxClosures = 16;
 
 const char* to_string(MaterialKind kind);
 MaterialKind material_kind_from_string(const std::string& name);  // throws InvalidInput
 
 // Validates one material; `where` names it in error messages.
 void validate(const Material& m, const std::string& where);
+
+// Fills m.closures and m.factors from a simple kind (diffuse, mirror, glass, glossy); then finalize_material.
+void lower_simple_material(Material& m);
+// The derived flags above, from m.closures.
+void finalize_material(Material& m);
 
 }  // namespace ps

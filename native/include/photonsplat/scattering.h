@@ -1,6 +1,7 @@
-// What happens where a ray meets a surface, shared by camera paths (view samples) and photon paths, so both
-// see the same geometry, normals and specular interfaces.
+// Where a ray meets a surface, shared by camera paths (view samples), shadow rays and photon paths, so all see
+// the same geometry and normals; what the surface then does to light is shading.h's.
 #pragma once
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "photonsplat/camera.h"
@@ -17,7 +18,9 @@ struct SurfacePoint {
     glm::vec3 shading_normal;    // unit, interpolated, on the same side as geometric_normal
     bool entering;               // the ray hit the front face (the triangle's winding normal faced the ray)
     const Material* material;
-    glm::vec3 color;             // the material's colour here: its texture at the hit's UV, else Material::color
+    glm::vec2 uv;                // the mesh's UV here (0 without UVs), where the material's textures are looked up
+    glm::vec3 tangent;           // for anisotropic materials only: unit, ⟂ shading normal, radial about the object's
+                                 // Z axis (Cycles' default tangent); 0 otherwise
     float rounding_scale;        // Instance::rounding_scale of the surface hit, for offset_ray_origin
 };
 
@@ -39,43 +42,6 @@ void orthonormal_basis(const glm::vec3& n, glm::vec3& b1, glm::vec3& b2);
 glm::vec3 sample_cosine_hemisphere(const glm::vec3& n, float u1, float u2);  // pdf = cos θ / π
 glm::vec3 sample_uniform_sphere(float u1, float u2);
 glm::vec3 sample_uniform_cone(const glm::vec3& axis, float cos_max, float u1, float u2);
-
-// One stochastic step through a mirror or glass interface (a glossy material at or below
-// kGlossyMirrorRoughness counts as a mirror here). `direction` is the travel direction of the ray.
-// The tint is surface.color (the material's colour, textured). The branch (reflect or refract) is chosen with probability equal to its Fresnel weight, so the returned
-// weight is the tint only: photon powers and path throughputs stay near equal.
-struct SpecularStep {
-    glm::vec3 direction;
-    glm::vec3 weight;
-    bool transmitted;
-};
-SpecularStep scatter_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
-                              float u);
-
-// Both branches of a glass surface at once, for camera paths that follow each (view_samples.cpp): the reflected
-// one weighted by the Fresnel reflectance F, the refracted one by (1 − F) × tint, so their weighted sum is what
-// scatter_specular returns on average. `both` is false where only one branch exists (total internal reflection,
-// or a mirror): then `reflected` holds scatter_specular's single step and `transmitted` is unused.
-struct SpecularSplit {
-    SpecularStep reflected;
-    SpecularStep transmitted;
-    bool both;
-};
-SpecularSplit split_specular(const Material& material, const SurfacePoint& surface, const glm::vec3& direction);
-
-// One step off a glossy surface (Material::is_glossy()): the new direction importance-samples the GGX lobe
-// (brdf.h) around the shading normal (the geometric one where the shading normal faces away from the arriving
-// ray) for the arriving `direction` (travel direction of the ray), which holds for photons as well as for
-// camera paths since the lobe is reciprocal. `weight` = f_r cos θ / pdf <= 1; `valid` is false when the sampled
-// direction leaves below the shading or the geometric surface (the path ends: single-scattering GGX loses
-// that light, as its white furnace integral < 1 says).
-struct GlossyStep {
-    glm::vec3 direction;
-    glm::vec3 weight;
-    bool valid;
-};
-GlossyStep scatter_glossy(const Material& material, const SurfacePoint& surface, const glm::vec3& direction,
-                          float u1, float u2);
 
 float luminance(const glm::vec3& rgb);
 

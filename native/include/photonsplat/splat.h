@@ -11,7 +11,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
-#include "photonsplat/brdf.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/view_samples.h"
 
@@ -90,12 +90,12 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
 }
 
 // f_r(x, ωi, ωo): the view sample's BRDF for light arriving from ωi (towards the light), seen along s.wo.
-// albedo/π plus, for kGlossy samples only, the GGX lobe of brdf.h (F0 = s.specular, α = s.roughness).
-inline glm::dvec3 sample_brdf(const ViewSample& s, const glm::vec3& wi) {
+// albedo/π, plus for kGlossy samples their reflection lobes (shading.h); `lobes` is ViewSamples::lobes.data().
+inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi) {
     constexpr double inv_pi = 0.318309886183790671538;
-    const glm::dvec3 diffuse = glm::dvec3(s.albedo) * inv_pi;
-    if (!(s.flags & kGlossy)) return diffuse;
-    return diffuse + glm::dvec3(ggx_reflection(s.specular, s.roughness, s.shading_normal, wi, s.wo));
+    if (!(s.flags & kGlossy)) return glm::dvec3(s.albedo) * inv_pi;
+    return glm::dvec3(bsdf_eval_reflection(s.albedo, lobes + s.lobe_begin, static_cast<int>(s.lobe_count),
+                                           s.shading_normal, wi, s.wo));
 }
 
 // The kernel relative to the uniform one, so that finish_sample's 1/(π r²) applies to both:
@@ -108,9 +108,9 @@ inline double kernel_weight(const glm::vec3& d, const SplatParams& params) {
 
 // f_r·Φ·w for one photon that passed photon_reaches_sample: what a sample accumulates (in double) before
 // finish_sample. `p` is the photon position relative to the samples' origin.
-inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const glm::vec3& p, const Photon& photon,
-                                        const SplatParams& params) {
-    const glm::dvec3 f = sample_brdf(s, photon.wi) * glm::dvec3(photon.power);
+inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const Lobe* lobes, const glm::vec3& p,
+                                        const Photon& photon, const SplatParams& params) {
+    const glm::dvec3 f = sample_brdf(s, lobes, photon.wi) * glm::dvec3(photon.power);
     return params.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params);
 }
 

@@ -9,6 +9,7 @@
 #include <glm/vec3.hpp>
 
 #include "photonsplat/camera.h"
+#include "photonsplat/closures.h"
 
 namespace ps {
 
@@ -17,32 +18,41 @@ class RenderControl;
 struct Stats;
 
 enum ViewSampleFlags : uint32_t {
-    kViaSpecular = 1u,  // the camera path bounced off a mirror or through glass before reaching it
-    kGlossy = 2u,       // the surface has a glossy lobe (specular > 0): its BRDF depends on the directions
-    kReflectedBranch = 4u,  // the second sample of its pixel: the reflected branch of the camera path's first glass
+    kViaSpecular = 1u,  // the camera path bounced off a mirror, through glass or a rough transmission before it
+    kGlossy = 2u,       // the surface has lobes beyond Lambert's (shading.h): its BRDF depends on the directions
 };
+// Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
+// stayed; the first hit's other parts each start a branch), so that each sample draws its own random numbers.
+constexpr uint32_t kBranchShift = 8;
+constexpr uint32_t kBranchMask = 0xffu << kBranchShift;
+inline uint32_t branch_of(uint32_t flags) { return (flags & kBranchMask) >> kBranchShift; }
 
 struct ViewSample {
     glm::vec3 position;        // RELATIVE TO ViewSamples::origin (camera-relative: keeps precision far from 0)
     glm::vec3 normal;          // geometric normal, flipped to face the arriving camera path
     glm::vec3 shading_normal;  // interpolated normal, on the same side as `normal`
     glm::vec3 wo;              // unit direction back along the camera path
-    glm::vec3 albedo;          // diffuse reflectance: the diffuse lobe is albedo / π
-    glm::vec3 specular;        // glossy lobe's Fresnel F0 tint; 0 for a purely diffuse surface
-    float roughness;           // glossy lobe's GGX α (Blender roughness²); unused when specular is 0
+    glm::vec3 albedo;          // Σ of the Lambert closures' weights: that part of the BRDF is albedo / π
     glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit); a pixel's
                                // radiance is the sum over its samples of throughput × what reaches the sample
     uint32_t pixel;            // y * width + x, y = 0 at the top
     uint32_t flags;            // ViewSampleFlags
     float depth;               // view depth of the FIRST hit of the pixel's camera ray (for cluster keys)
     float rounding_scale;      // SurfacePoint::rounding_scale, for rays leaving the sample (offset_ray_origin)
+    uint32_t lobe_begin;       // kGlossy samples: its other reflection lobes are ViewSamples::lobes[lobe_begin, +count)
+    uint32_t lobe_count;
 };
 
 struct ViewSamples {
     int width = 0, height = 0;
     glm::vec3 origin{0.0f};             // render-space position (scene.h) sample positions are relative to (the camera)
-    std::vector<ViewSample> samples;    // in pixel order; one per pixel, two where the camera path split at glass
-                                        // (refracted first), none where it escaped, was cut out or was dropped
+    std::vector<ViewSample> samples;    // in pixel order; none where the camera path escaped, was cut out or was
+                                        // dropped, else one per part of the first hit's BSDF that ends in a sample
+                                        // (shading.h: its lobes, its mirror, refraction, transparency, transmission)
+    std::vector<Lobe> lobes;            // the reflection lobes of kGlossy samples (beyond the Lambert albedo)
+    // width × height, only where the scene has rough transmission or translucency (else empty): light that reached
+    // camera paths through such a surface from the lights directly (its own next-event estimation).
+    std::vector<glm::vec3> transmitted_direct;
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
     // Of the FIRST surface each camera ray hits (glass and mirrors included), as Cycles' Normal and Depth passes:
@@ -59,9 +69,11 @@ struct ViewSampleSettings {
     // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
     // mean is box-filtered over each pixel (anti-aliasing).
     bool jitter = false;
-    // Follow both the reflected and the refracted ray at a camera path's first glass surface (two samples for the
-    // pixel), instead of one chosen with its Fresnel probability.
+    // Follow every part of the BSDF at a camera path's first surface (the view sample of its lobes, the mirror,
+    // the refraction, transparency, the rough transmission: a sample each), instead of one chosen with its
+    // weight's probability. Later surfaces always choose one.
     bool split_at_glass = true;
+    int samples_per_light = 4;    // next-event estimation at rough transmissions along camera paths
 };
 
 ViewSamples generate_view_samples(const Scene& scene, const Camera& camera, const ViewSampleSettings& settings,

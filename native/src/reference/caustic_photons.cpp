@@ -1,5 +1,7 @@
 #include "caustic_photons.h"
 
+#include "photonsplat/shading.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -70,15 +72,16 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 Hit hit;
                 if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
                 const SurfacePoint s = surface_at(scene, ray, hit);
-                if (!s.material->is_specular()) {
-                    // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours. Either way it ends here.
-                    if (bounce > 0)
-                        per_chunk[chunk].push_back(Photon{s.position, -ray.direction, s.geometric_normal, power, kCaustic});
-                    break;
-                }
+                const Bsdf b = shade(scene, s, -ray.direction);
+                // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
+                // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).
+                if (bounce > 0 && bsdf_has(b, LobeSet::reflection))
+                    per_chunk[chunk].push_back(Photon{s.position, -ray.direction, s.geometric_normal, power, kCaustic});
                 if (bounce == max_specular_bounces) break;
-                const SpecularStep step = scatter_specular(*s.material, s, ray.direction, rng.uniform());
-                const float keep = std::max({step.weight.x, step.weight.y, step.weight.z});
+                const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+                const BsdfSample step = bsdf_sample(b, u0, u1, u2);
+                if (step.kind == ScatterKind::none || step.kind == ScatterKind::lobes) break;
+                const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
                 power *= step.weight / keep;
                 const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
@@ -136,7 +139,7 @@ int64_t CausticPhotonMap::cell_of(float v, int axis) const {
     return static_cast<int64_t>(std::clamp(c, 0.0, static_cast<double>(kMaxCellsPerAxis - 1)));
 }
 
-glm::vec3 CausticPhotonMap::radiance(const ViewSample& s) const {
+glm::vec3 CausticPhotonMap::radiance(const ViewSample& s, const Lobe* lobes) const {
     if (photons_.empty()) return glm::vec3(0.0f);
     const float r = params_.radius;
     int64_t from[3] = {0, 0, 0}, to[3] = {0, 0, 0};
@@ -154,7 +157,7 @@ glm::vec3 CausticPhotonMap::radiance(const ViewSample& s) const {
                 if (found == cells_.end()) continue;
                 for (uint32_t i = found->second.first; i < found->second.second; ++i)
                     if (photon_reaches_sample(s, positions_[i], photons_[i], params_))
-                        sum += photon_reflected_flux(s, positions_[i], photons_[i], params_);
+                        sum += photon_reflected_flux(s, lobes, positions_[i], photons_[i], params_);
             }
     return finish_sample(s, sum, params_);
 }

@@ -27,7 +27,7 @@ public:
 
     // Radiance reflected towards s.wo by the photons around s (s.position relative to origin()), times
     // s.throughput: the per-sample test, BRDF and uniform kernel of render() (splat.h), τ = 60°.
-    glm::vec3 radiance(const ViewSample& s) const;
+    glm::vec3 radiance(const ViewSample& s, const Lobe* lobes) const;
     const glm::vec3& origin() const { return origin_; }
     size_t size() const { return photons_.size(); }
 

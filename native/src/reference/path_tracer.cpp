@@ -21,7 +21,7 @@
 #include <glm/geometric.hpp>
 
 #include "caustic_photons.h"
-#include "photonsplat/brdf.h"
+#include "photonsplat/direct_light.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
 #include "photonsplat/materials.h"
@@ -29,6 +29,7 @@
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/splat.h"
 #include "photonsplat/view_samples.h"
 
@@ -36,83 +37,51 @@ namespace ps {
 
 namespace {
 
-constexpr float kInvPi = 0.318309886183790671538f;
 constexpr int kRouletteFromDepth = 3;
-constexpr float kMinGlossyCosine = 1e-3f;  // as view_samples.cpp: below it a glossy lobe uses the geometric normal
 
-float power_heuristic(float chosen, float other) {
-    if (!(other > 0.0f)) return 1.0f;
-    const float a = chosen * chosen, b = other * other;
-    return std::isfinite(a + b) ? a / (a + b) : (chosen >= other ? 1.0f : 0.0f);
-}
-
-// The vertex as the shared BRDF and photon-gathering code (splat.h) sees a view sample.
-ViewSample vertex_at(const SurfacePoint& s, const glm::vec3& wo, const glm::vec3& origin, const glm::vec3& throughput) {
+// The vertex as the shared photon-gathering code (splat.h) sees a view sample: its reflection parts, the lobes
+// copied into `lobes` (the sample's lobe_begin is 0 there).
+ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& origin, const glm::vec3& throughput,
+                     Lobe (&lobes)[kMaxLobes]) {
     ViewSample v{};
     v.position = s.position - origin;
-    v.normal = s.geometric_normal;
-    v.shading_normal = s.shading_normal;
+    v.normal = b.ng;
+    v.shading_normal = b.n;
     v.rounding_scale = s.rounding_scale;
-    v.wo = wo;
+    v.wo = b.wo;
     v.throughput = throughput;
-    if (s.material->is_glossy()) {
-        v.albedo = glm::vec3(0.0f);
-        v.specular = s.material->color;
-        v.roughness = s.material->glossy_alpha();
-        v.flags = kGlossy;
-        if (!(glm::dot(v.shading_normal, wo) > kMinGlossyCosine)) v.shading_normal = v.normal;
-    } else {
-        v.albedo = s.material->color;
-        v.specular = glm::vec3(0.0f);
-        v.roughness = 0.0f;
-        v.flags = 0;
-    }
+    v.albedo = b.lambert;
+    v.lobe_begin = 0;
+    v.lobe_count = 0;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (!is_transmission(b.lobes[k])) lobes[v.lobe_count++] = b.lobes[k];
+    v.flags = v.lobe_count > 0 ? kGlossy : 0u;
     return v;
 }
 
-// Density of the BSDF sampling below choosing wi at v.
-float bsdf_pdf(const ViewSample& v, const glm::vec3& wi) {
-    if (!(glm::dot(wi, v.normal) > 0.0f)) return 0.0f;
-    if (v.flags & kGlossy) return ggx_reflection_pdf(v.roughness, v.shading_normal, wi, v.wo);
-    return std::max(0.0f, glm::dot(wi, v.shading_normal)) * kInvPi;
-}
-
-struct BsdfSample {
-    glm::vec3 direction;
-    glm::vec3 weight;  // f cos / pdf
-    float pdf;         // 0: the path ends
-};
-
-BsdfSample sample_bsdf(const ViewSample& v, float u1, float u2) {
-    if (v.flags & kGlossy) {
-        const GgxSample g = sample_ggx_reflection(v.specular, v.roughness, v.shading_normal, v.wo, u1, u2);
-        if (!(g.pdf > 0.0f) || !(glm::dot(g.direction, v.normal) > 0.0f)) return {g.direction, glm::vec3(0.0f), 0.0f};
-        return {g.direction, g.weight, g.pdf};
-    }
-    const glm::vec3 d = sample_cosine_hemisphere(v.shading_normal, u1, u2);
-    const float pdf = glm::dot(d, v.shading_normal) * kInvPi;
-    if (!(glm::dot(d, v.normal) > 0.0f) || !(pdf > 0.0f)) return {d, glm::vec3(0.0f), 0.0f};
-    return {d, v.albedo, pdf};
-}
-
-// Next-event estimation at v (world position x) over every source but the world.
-glm::vec3 sample_lights(const PathTracerContext& c, const ViewSample& v, const glm::vec3& x, Rng& rng,
+// Next-event estimation at x over every source but the world, both sides of the surface (transmission lobes
+// see light from behind), weighted against the BSDF sampling of bsdf_sample.
+glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const SurfacePoint& s, Rng& rng,
                         PathCounters& counters) {
     glm::vec3 sum(0.0f);
-    const RayTracer& tracer = c.scene.ray_tracer();
+    const bool transmits = bsdf_has(b, LobeSet::transmission);
     for (size_t l = 0; l < c.sources.size(); ++l) {
         if (c.sources.is_world(l)) continue;
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
-        const LightIncidence in = c.sources.sample_incidence(l, x, v.normal, u1, u2, u3);
-        if (!(glm::dot(in.wi, v.normal) > 0.0f)) continue;  // light from behind the surface the path sees
-        const float cos_shading = glm::dot(in.wi, v.shading_normal);
-        if (!(cos_shading > 0.0f) || in.value == glm::vec3(0.0f)) continue;
-        const glm::vec3 f(sample_brdf(v, in.wi));
+        const LightIncidence in = c.sources.sample_incidence(l, s.position, b.ng, u1, u2, u3);
+        const bool front = glm::dot(in.wi, b.ng) > 0.0f;
+        if (!front && !transmits) continue;  // light from behind a surface that does not pass it on
+        if (!front && glm::dot(in.wi, b.ng) == 0.0f) continue;
+        if (in.value == glm::vec3(0.0f)) continue;
+        const glm::vec3 f = bsdf_eval(b, in.wi);
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
-        if (tracer.occluded(Ray{offset_ray_origin(x, v.normal, v.rounding_scale), in.wi}, 0.0f, in.distance * (1.0f - 1e-4f))) continue;
-        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(v, in.wi));
-        sum += f * in.value * (cos_shading * w);
+        const glm::vec3 side = front ? b.ng : -b.ng;
+        const glm::vec3 t = shadow_transmittance(c.scene, Ray{offset_ray_origin(s.position, side, s.rounding_scale), in.wi},
+                                                 in.distance * (1.0f - 1e-4f), c.transparency);
+        if (t == glm::vec3(0.0f)) continue;
+        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf, bsdf_sample_pdf(b, in.wi));
+        sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
     return sum;
 }
@@ -168,25 +137,27 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 last.nonspecular && !last.specular_since ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) : 0.0f;
             radiance += throughput * m.emission * light_weight(last, false, light_pdf);
         }
-        if (m.is_specular()) {
-            if (depth >= c.max_bounces) break;
-            const SpecularStep step = scatter_specular(m, s, ray.direction, rng.uniform());
-            throughput *= step.weight;
-            const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
-            ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
-            last.specular_since = true;
-        } else {
-            const ViewSample v = vertex_at(s, -ray.direction, origin, throughput);
-            radiance += throughput * sample_lights(c, v, s.position, rng, counters);
-            if (c.caustics) radiance += c.caustics->radiance(v);  // throughput included
-            if (depth >= c.max_bounces) break;
-            const float u1 = rng.uniform(), u2 = rng.uniform();
-            const BsdfSample b = sample_bsdf(v, u1, u2);
-            if (!(b.pdf > 0.0f)) break;
-            throughput *= b.weight;
-            ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), b.direction};
-            last = LastScatter{true, false, s.position, b.pdf};
+        const Bsdf b = shade(scene, s, -ray.direction);
+        if (bsdf_has(b, LobeSet::all)) {
+            radiance += throughput * sample_lights(c, b, s, rng, counters);
+            if (c.caustics && bsdf_has(b, LobeSet::reflection)) {
+                Lobe lobes[kMaxLobes];
+                const ViewSample v = vertex_at(s, b, origin, throughput, lobes);
+                radiance += c.caustics->radiance(v, lobes);  // throughput included
+            }
         }
+        if (depth >= c.max_bounces) break;
+        const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+        const BsdfSample bs = bsdf_sample(b, u0, u1, u2);
+        if (bs.kind == ScatterKind::none) break;
+        throughput *= bs.weight;
+        const glm::vec3 side = bs.transmitted ? -s.geometric_normal : s.geometric_normal;
+        if (bs.kind == ScatterKind::lobes && !(glm::dot(bs.direction, side) > 0.0f)) break;
+        ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), bs.direction};
+        if (bs.kind == ScatterKind::lobes)
+            last = LastScatter{true, false, s.position, bs.pdf};
+        else
+            last.specular_since = true;
         const float keep = std::max({throughput.x, throughput.y, throughput.z});
         if (!(keep > 0.0f)) break;
         if (depth >= kRouletteFromDepth && keep < 1.0f) {

@@ -20,6 +20,7 @@ struct PathTracerContext {
     const CausticPhotonMap* caustics;        // this pass's photons; nullptr = no photon mapping
     std::vector<uint8_t> photon_caustics;    // per source: its L S+ D paths belong to the photons
     int max_bounces;
+    bool transparency = false;               // scene_has_transparency: shadow rays look through transparent closures
 };
 
 // Per-thread tallies, added into the render's counters once per pass.

@@ -20,6 +20,7 @@
 
 #include "caustic_photons.h"
 #include "path_tracer.h"
+#include "photonsplat/direct_light.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/ray_tracer.h"
@@ -94,7 +95,7 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
         control.begin_stage("scene", 0.0, 0.0);
         report_scene(scene, stats);
         const LightSources sources(scene);
-        PathTracerContext context{scene, sources, nullptr, {}, settings.max_bounces};
+        PathTracerContext context{scene, sources, nullptr, {}, settings.max_bounces, scene_has_transparency(scene)};
         bool photon_sources = false;
         for (size_t l = 0; l < sources.size(); ++l) {
             const bool photons = settings.caustic_photons > 0 && caustics_by_photons(sources, l);

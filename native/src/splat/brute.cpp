@@ -46,7 +46,7 @@ std::vector<glm::vec3> splat_brute(const ViewSamples& samples, const PhotonMap& 
                 const size_t end = std::min(photon_count, begin + kPhotonsPerCancelCheck);
                 for (size_t j = begin; j != end; ++j) {
                     if (!photon_reaches_sample(s, positions[j], photons.photons[j], params)) continue;
-                    reflected_flux += photon_reflected_flux(s, positions[j], photons.photons[j], params);
+                    reflected_flux += photon_reflected_flux(s, samples.lobes.data(), positions[j], photons.photons[j], params);
                     ++local_contributing;
                 }
             }

@@ -638,13 +638,13 @@ private:
                 for (size_t m = 0; m != list_size; ++m) {
                     const uint32_t j = list[m];
                     if (!photon_reaches_sample(s, positions_[j], photons_[j], params_)) continue;
-                    reflected_flux += photon_reflected_flux(s, positions_[j], photons_[j], params_);
+                    reflected_flux += photon_reflected_flux(s, lobes_, positions_[j], photons_[j], params_);
                     ++contributing;
                 }
                 if constexpr (kCones) {
                     // The photons accepted by the leaf or its ancestors: all diffuse-only here, f = ρ/π for any ωi.
                     if (last && accepted_here)
-                        reflected_flux += sample_brdf(s, s.normal) * accepted_.weighted_power(leaf, s.position, r);
+                        reflected_flux += sample_brdf(s, lobes_, s.normal) * accepted_.weighted_power(leaf, s.position, r);
                 }
                 if (last)
                     radiance_[i] = finish_sample(s, reflected_flux, params_);

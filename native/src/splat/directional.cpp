@@ -484,10 +484,10 @@ int shade_bins(const double* values, double scale, ShadeBin* out) {
     return count;
 }
 
-glm::dvec3 reflect_bins(const ViewSample& s, const ShadeBin* bins, int count) {
+glm::dvec3 reflect_bins(const ViewSample& s, const Lobe* lobes, const ShadeBin* bins, int count) {
     glm::dvec3 sum(0.0);
     for (int b = 0; b < count; ++b)
-        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, bins[b].direction) * bins[b].flux;
+        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, lobes, bins[b].direction) * bins[b].flux;
     return sum;
 }
 
@@ -901,12 +901,12 @@ private:
                     continue;
                 }
                 const FacetShade& sh = shades[f];
-                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, s.normal) * sh.own_sum
-                                                          : reflect_bins(s, sh.own, sh.own_count);
+                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, lobes_, s.normal) * sh.own_sum
+                                                          : reflect_bins(s, lobes_, sh.own, sh.own_count);
                 if (sh.parent_count > 0) {
                     const glm::dvec3 from_parent = diffuse && sh.parent_faces
-                                                       ? sample_brdf(s, s.normal) * sh.parent_sum
-                                                       : reflect_bins(s, sh.parent, sh.parent_count);
+                                                       ? sample_brdf(s, lobes_, s.normal) * sh.parent_sum
+                                                       : reflect_bins(s, lobes_, sh.parent, sh.parent_count);
                     flux = (1.0 - double(beta)) * flux + double(beta) * from_parent;
                 }
                 radiance_[i] = finish_sample(s, flux, params_);

@@ -323,7 +323,7 @@ struct Scratch {
 // the same expression cannot make it stricter) compacts the candidates that may pass; about two in three do
 // not, and a branch on that would be mispredicted most of the time. The second runs the real per-sample test
 // on those, in the same (ascending) order, and adds up their contributions.
-glm::dvec3 gather_sample(const PhotonGrid& grid, const ViewSample& s, const SplatParams& params,
+glm::dvec3 gather_sample(const PhotonGrid& grid, const ViewSample& s, const Lobe* lobes, const SplatParams& params,
                          float pretest_distance_sq, const RenderControl& control, Scratch& scratch, Counts& counts) {
     int64_t first[3], last[3];
     if (!grid.cell_range(s.position, params.radius, first, last)) return glm::dvec3(0.0);
@@ -349,7 +349,7 @@ glm::dvec3 gather_sample(const PhotonGrid& grid, const ViewSample& s, const Spla
         for (size_t i = 0; i != n; ++i) {
             const GridPhoton& g = photons[near[i]];
             if (!photon_reaches_sample(s, g.position, g.photon, params)) continue;
-            reflected_flux += photon_reflected_flux(s, g.position, g.photon, params);
+            reflected_flux += photon_reflected_flux(s, lobes, g.position, g.photon, params);
             ++counts.contributing;
         }
     }
@@ -394,7 +394,7 @@ std::vector<glm::vec3> splat_gather(const ViewSamples& samples, const PhotonMap&
                           for (size_t i = range.begin(); i != range.end(); ++i) {
                               const ViewSample& s = views[i];
                               const glm::dvec3 reflected_flux =
-                                  gather_sample(grid, s, params, pretest_distance_sq, control, local, counts);
+                                  gather_sample(grid, s, samples.lobes.data(), params, pretest_distance_sq, control, local, counts);
                               radiance[i] = finish_sample(s, reflected_flux, params);
                           }
                           tests += counts.tests;

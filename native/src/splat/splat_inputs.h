@@ -21,6 +21,7 @@ protected:
     SplatInputs(const ViewSamples& samples, const PhotonMap& photons, const SplatParams& params,
                 const RenderControl& control, Stats& stats)
         : views_(samples.samples),
+          lobes_(samples.lobes.data()),
           photons_(photons.photons),
           params_(params),
           control_(control),
@@ -38,6 +39,7 @@ protected:
     }
 
     const std::vector<ViewSample>& views_;
+    const Lobe* lobes_;  // ViewSamples::lobes, for sample_brdf
     const std::vector<Photon>& photons_;
     const SplatParams& params_;
     const RenderControl& control_;

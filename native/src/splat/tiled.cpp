@@ -690,7 +690,7 @@ private:
                                 const glm::vec3& p = positions[m0 + u];
                                 const Photon& photon = records[m0 + u];
                                 if (!photon_reaches_sample(s, p, photon, params_)) continue;
-                                reflected_flux += photon_reflected_flux(s, p, photon, params_);
+                                reflected_flux += photon_reflected_flux(s, lobes_, p, photon, params_);
                                 ++contributing;
                             }
                         }

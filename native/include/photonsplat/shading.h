@@ -1,0 +1,86 @@
+// A surface's closures evaluated at one hit for one outgoing direction: the BSDF every stage uses. Camera paths
+// (view_samples.cpp), direct light, photon paths and the reference path tracer call shade() at a hit, then
+// evaluate, sample or split what it returns; the splat evaluates a view sample's stored lobes (splat.h).
+//
+// The closure sum splits three ways:
+//   - lambert: the Lambert diffuse closures, summed into one albedo (the common case, evaluated without lobes);
+//   - lobes: every other non-delta closure (Oren–Nayar, microfacets, sheen, velvet, translucent, rough
+//     refraction), each a Lobe with its weight made concrete here;
+//   - delta parts: the sharp reflections (one mirror direction, their Fresnel-weighted sum), the sharp
+//     refraction (one direction) and transparency (straight on).
+#pragma once
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "photonsplat/closures.h"
+
+namespace ps {
+
+class Scene;
+struct SurfacePoint;
+
+constexpr int kMaxLobes = 8;
+
+struct Bsdf {
+    glm::vec3 n{0.0f, 0.0f, 1.0f};   // shading normal, on the side of wo (geometric where shading faces away)
+    glm::vec3 ng{0.0f, 0.0f, 1.0f};  // geometric normal on the side of wo
+    glm::vec3 wo{0.0f, 0.0f, 1.0f};  // unit, away from the surface
+    glm::vec3 lambert{0.0f};         // Σ Lambert weights: f = lambert / π on wo's side
+    Lobe lobes[kMaxLobes];
+    int lobe_count = 0;
+    glm::vec3 mirror{0.0f};          // Σ sharp reflection weights × their Fresnel at n·wo
+    glm::vec3 refraction{0.0f};      // Σ sharp refraction weights
+    float refraction_eta = 1.0f;     // n_other / n_this of the (first) sharp refraction
+    glm::vec3 transparent{0.0f};     // Σ transparent weights
+
+    bool has_lobes() const { return lobe_count > 0 || lambert != glm::vec3(0.0f); }
+    bool directional() const { return lobe_count > 0; }  // the value depends on directions beyond Lambert's
+    bool has_delta() const {
+        return mirror != glm::vec3(0.0f) || refraction != glm::vec3(0.0f) || transparent != glm::vec3(0.0f);
+    }
+};
+
+// The BSDF of `surface` (its material, textures at its UV) seen from `wo` (unit, away from the surface, on the
+// side of surface.geometric_normal). Lobes beyond kMaxLobes are merged into the last (never in practice: the
+// add-on refuses materials with more non-delta closures than that).
+Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo);
+
+// Which non-delta parts a strategy covers: all of them, the reflection side (Lambert and every lobe that is not a
+// transmission), or the transmission lobes (translucent, rough refraction).
+enum class LobeSet : uint8_t { all, reflection, transmission };
+
+// Σ f of the set's non-delta parts for wi (no cosine). Reflection parts count only for wi on wo's side of the
+// geometric normal, transmission parts only on the other (light leaking under the shading normal must not count).
+glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
+// The density with which bsdf_sample_set(b, set) draws wi (solid angle).
+float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
+// Only the reflection side of bsdf_eval, from a view sample's stored parts: what it receives from photons (splat.h).
+glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
+                               const glm::vec3& wi, const glm::vec3& wo);
+bool bsdf_has(const Bsdf& b, LobeSet set);  // the set has a part with weight here
+bool is_transmission(const Lobe& lobe);
+
+// What a path does next at this surface.
+enum class ScatterKind : uint8_t { none, lobes, mirror, refraction, transparent };
+struct BsdfSample {
+    ScatterKind kind = ScatterKind::none;  // none: absorbed (the path ends)
+    glm::vec3 direction{0.0f};
+    glm::vec3 weight{0.0f};  // f |cos| / pdf for lobes; delta weight / choice probability for the rest
+    float pdf = 0.0f;        // lobes only: bsdf_pdf of direction for the set sampled (for MIS); 0 for delta parts
+    bool transmitted = false;  // the direction leaves on the other side (offset the next ray there)
+};
+// Samples the whole closure sum: a part chosen in proportion to its sampling weight (the delta parts' luminance,
+// the lobes' lobe_sampling_weight), then a direction. u0 chooses, u1 and u2 place. Non-delta samples carry
+// bsdf_sample_pdf of their direction (the lobes' density times the probability of choosing the lobes).
+BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2);
+float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi);
+// The same over one set of non-delta parts only.
+BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2);
+
+// The delta directions at this surface (the refraction's only when it exists: none under total internal
+// reflection, where its weight has gone to the mirror by Fresnel already).
+glm::vec3 mirror_direction(const Bsdf& b);
+bool refraction_direction(const Bsdf& b, glm::vec3& direction);
+
+}  // namespace ps

@@ -1,0 +1,282 @@
+#include "photonsplat/shading.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "photonsplat/materials.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/textures.h"
+
+namespace ps {
+
+namespace {
+
+constexpr float kInvPi = 0.318309886183790671538f;
+
+// Below this cosine between the shading normal and the viewer, a directional closure shades with the geometric
+// normal: interpolation tilts shading normals away from the viewer at silhouettes of smooth meshes, where a lobe
+// would see wo below its surface and reflect nothing (black rims).
+constexpr float kMinShadingCosine = 1e-3f;
+
+bool is_zero(const glm::vec3& v) { return v.x <= 0.0f && v.y <= 0.0f && v.z <= 0.0f; }
+
+// Reflection-side f of the Lambert sum and the lobes; wi on wo's side of the geometric normal.
+glm::vec3 reflection_value(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n,
+                           const glm::vec3& wi, const glm::vec3& wo) {
+    glm::vec3 f = glm::dot(wi, n) > 0.0f ? lambert * kInvPi : glm::vec3(0.0f);
+    for (int k = 0; k < count; ++k)
+        if (!is_transmission(lobes[k])) f += lobe_eval(lobes[k], n, wi, wo).f;
+    return f;
+}
+
+bool in_set(const Lobe& l, LobeSet set) {
+    if (set == LobeSet::all) return true;
+    return is_transmission(l) == (set == LobeSet::transmission);
+}
+
+// The lobe-sampling strategy of a set: Lambert (outside the transmission set) and each lobe, chosen in
+// proportion to these weights.
+struct LobeChoice {
+    LobeSet set = LobeSet::all;
+    float lambert = 0.0f;
+    float lobe[kMaxLobes] = {};
+    float total = 0.0f;
+};
+
+LobeChoice lobe_choice(const Bsdf& b, LobeSet set) {
+    LobeChoice c;
+    c.set = set;
+    if (set != LobeSet::transmission) c.lambert = luminance(b.lambert);
+    c.total = c.lambert;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (!in_set(b.lobes[k], set)) continue;
+        c.lobe[k] = std::max(0.0f, lobe_sampling_weight(b.lobes[k], b.n, b.wo));
+        if (!std::isfinite(c.lobe[k])) c.lobe[k] = 0.0f;
+        c.total += c.lobe[k];
+    }
+    return c;
+}
+
+float choice_pdf(const Bsdf& b, const LobeChoice& c, const glm::vec3& wi) {
+    if (!(c.total > 0.0f)) return 0.0f;
+    float pdf = c.lambert > 0.0f ? c.lambert * std::max(0.0f, glm::dot(wi, b.n)) * kInvPi : 0.0f;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (c.lobe[k] > 0.0f) pdf += c.lobe[k] * lobe_eval(b.lobes[k], b.n, wi, b.wo).pdf;
+    return pdf / c.total;
+}
+
+BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1, float u2) {
+    BsdfSample out;
+    if (!(c.total > 0.0f)) return out;
+    // Pick Lambert or a lobe by u0, then place the direction with u1, u2.
+    float pick = u0 * c.total;
+    glm::vec3 wi(0.0f);
+    bool picked = false;
+    if (c.lambert > 0.0f) {
+        if (pick < c.lambert) {
+            wi = sample_cosine_hemisphere(b.n, u1, u2);
+            picked = true;
+        }
+        pick -= c.lambert;
+    }
+    int last = -1;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (c.lobe[k] > 0.0f) last = k;
+    for (int k = 0; k < b.lobe_count && !picked; ++k) {
+        if (!(c.lobe[k] > 0.0f)) continue;
+        if (pick < c.lobe[k] || k == last) {
+            const LobeSample s = lobe_sample(b.lobes[k], b.n, b.wo, u1, u2);
+            if (!(s.pdf > 0.0f)) return out;
+            wi = s.direction;
+            picked = true;
+        }
+        pick -= c.lobe[k];
+    }
+    if (!picked) return out;
+    const float pdf = choice_pdf(b, c, wi);
+    if (!(pdf > 0.0f) || !std::isfinite(pdf)) return out;
+    const glm::vec3 f = bsdf_eval(b, wi, c.set);
+    const glm::vec3 weight = f * (std::fabs(glm::dot(wi, b.n)) / pdf);
+    if (is_zero(weight) || !std::isfinite(weight.x + weight.y + weight.z)) return out;
+    out.kind = ScatterKind::lobes;
+    out.direction = wi;
+    out.weight = weight;
+    out.pdf = pdf;
+    out.transmitted = glm::dot(wi, b.ng) < 0.0f;
+    return out;
+}
+
+}  // namespace
+
+Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+    Bsdf b;
+    const Material& m = *surface.material;
+    b.ng = surface.geometric_normal;
+    b.wo = wo;
+    b.n = surface.shading_normal;
+    if (m.directional && !(glm::dot(b.n, wo) > kMinShadingCosine)) b.n = b.ng;
+    if (m.holdout) return b;  // absorbs everything
+
+    // The view-dependent factors, once per hit (Cycles evaluates Fresnel and Layer Weight at the shading point).
+    float factor[kMaxFactors];
+    const float cos_no = std::clamp(glm::dot(surface.shading_normal, wo), 0.0f, 1.0f);
+    for (size_t j = 0; j < m.factors.size(); ++j) factor[j] = evaluate_factor(m.factors[j], cos_no, !surface.entering);
+
+    for (const Closure& c : m.closures) {
+        glm::vec3 weight = c.color;
+        for (size_t j = 0; j < m.factors.size(); ++j) {
+            if (c.factors_on & (1u << j)) weight *= factor[j];
+            if (c.factors_off & (1u << j)) weight *= 1.0f - factor[j];
+        }
+        glm::vec3 specular_color = c.specular_color;
+        if (c.texture >= 0) {
+            const glm::vec3 texel = scene.textures()[static_cast<size_t>(c.texture)].lookup(surface.uv);
+            if (c.texture_target == TextureTarget::color)
+                weight *= texel;
+            else
+                specular_color *= texel;
+        }
+        if (is_zero(weight)) continue;
+        // Refraction indices are relative to the side the ray came from: into the material from the front.
+        const float eta = surface.entering ? c.ior : 1.0f / c.ior;
+        if (c.kind == ClosureKind::transparent) {
+            b.transparent += weight;
+            continue;
+        }
+        if (c.is_delta()) {
+            if (c.kind == ClosureKind::reflection) {
+                b.mirror += weight * sharp_reflection_fresnel(c.fresnel, specular_color, c.ior,
+                                                              std::clamp(glm::dot(b.n, wo), 0.0f, 1.0f));
+            } else {
+                if (is_zero(b.refraction)) b.refraction_eta = eta;
+                b.refraction += weight;
+            }
+            continue;
+        }
+        if (c.kind == ClosureKind::diffuse && c.roughness == 0.0f) {
+            b.lambert += weight;
+            continue;
+        }
+        Lobe l;
+        l.kind = c.kind;
+        l.distribution = c.distribution;
+        l.fresnel = c.fresnel;
+        l.weight = weight;
+        l.specular_color = specular_color;
+        l.roughness = c.roughness;
+        l.alpha_x = c.alpha_x;
+        l.alpha_y = c.alpha_y;
+        l.eta = c.kind == ClosureKind::refraction ? eta : c.ior;
+        l.tangent = surface.tangent;
+        if (b.lobe_count < kMaxLobes) {
+            b.lobes[b.lobe_count++] = l;
+        } else {
+            // Never for a validated material (at most kMaxLobes non-Lambert closures); kept finite regardless.
+            b.lobes[kMaxLobes - 1].weight += l.weight;
+        }
+    }
+    return b;
+}
+
+bool is_transmission(const Lobe& l) { return l.kind == ClosureKind::translucent || l.kind == ClosureKind::refraction; }
+
+glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set) {
+    const bool above = glm::dot(wi, b.ng) > 0.0f;
+    if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
+    if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
+    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo);
+    glm::vec3 f(0.0f);
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo).f;
+    return f;
+}
+
+glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
+                               const glm::vec3& wi, const glm::vec3& wo) {
+    return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
+}
+
+float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set) { return choice_pdf(b, lobe_choice(b, set), wi); }
+
+bool bsdf_has(const Bsdf& b, LobeSet set) {
+    if (set != LobeSet::transmission && !is_zero(b.lambert)) return true;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (in_set(b.lobes[k], set)) return true;
+    return false;
+}
+
+BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2) {
+    return sample_choice(b, lobe_choice(b, set), u0, u1, u2);
+}
+
+glm::vec3 mirror_direction(const Bsdf& b) {
+    const float c = glm::dot(b.wo, b.n);
+    return glm::normalize(2.0f * c * b.n - b.wo);
+}
+
+bool refraction_direction(const Bsdf& b, glm::vec3& direction) {
+    // Snell's law about the shading normal; eta = n_other / n_this.
+    const float cos_i = std::clamp(glm::dot(b.wo, b.n), 0.0f, 1.0f);
+    const float inv_eta = 1.0f / b.refraction_eta;
+    const float sin2_t = inv_eta * inv_eta * std::max(0.0f, 1.0f - cos_i * cos_i);
+    if (!(sin2_t < 1.0f)) return false;  // total internal reflection
+    const float cos_t = std::sqrt(1.0f - sin2_t);
+    direction = glm::normalize(-inv_eta * b.wo + (inv_eta * cos_i - cos_t) * b.n);
+    return true;
+}
+
+namespace {
+float delta_sampling_weight(const Bsdf& b) {
+    return luminance(b.mirror) + luminance(b.refraction) + luminance(b.transparent);
+}
+}  // namespace
+
+float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi) {
+    const LobeChoice lobes = lobe_choice(b, LobeSet::all);
+    const float total = lobes.total + delta_sampling_weight(b);
+    if (!(lobes.total > 0.0f) || !(total > 0.0f)) return 0.0f;
+    return choice_pdf(b, lobes, wi) * (lobes.total / total);
+}
+
+BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
+    const LobeChoice lobes = lobe_choice(b, LobeSet::all);
+    const float w_mirror = luminance(b.mirror), w_refraction = luminance(b.refraction),
+                w_transparent = luminance(b.transparent);
+    const float total = lobes.total + w_mirror + w_refraction + w_transparent;
+    BsdfSample out;
+    if (!(total > 0.0f) || !std::isfinite(total)) return out;
+    float pick = u0 * total;
+    if (pick < lobes.total) {
+        // Rescale u0 into [0, 1) for the lobe choice, then weigh by the probability of having chosen the lobes.
+        BsdfSample s = sample_choice(b, lobes, std::min(pick / lobes.total, 0x1.fffffep-1f), u1, u2);
+        s.weight *= total / lobes.total;
+        s.pdf *= lobes.total / total;
+        return s;
+    }
+    pick -= lobes.total;
+    if (pick < w_mirror || (w_refraction <= 0.0f && w_transparent <= 0.0f)) {
+        if (!(w_mirror > 0.0f)) return out;
+        out.kind = ScatterKind::mirror;
+        out.direction = mirror_direction(b);
+        out.weight = b.mirror * (total / w_mirror);
+        return out;
+    }
+    pick -= w_mirror;
+    if (pick < w_refraction || w_transparent <= 0.0f) {
+        if (!(w_refraction > 0.0f) || !refraction_direction(b, out.direction)) return out;
+        out.kind = ScatterKind::refraction;
+        out.weight = b.refraction * (total / w_refraction);
+        out.transmitted = true;
+        return out;
+    }
+    out.kind = ScatterKind::transparent;
+    out.direction = -b.wo;
+    out.weight = b.transparent * (total / w_transparent);
+    out.transmitted = true;
+    return out;
+}
+
+}  // namespace ps
