@@ -668,3 +668,21 @@ def test_metallic_bsdf_is_a_metal(empty_scene):
     r = one(spec, "reflection")
     assert r["distribution"] == "sharp" and approx(r["specular_color"], expected, rel=1e-4)
     assert any("conductor" in n for n in spec.notes)
+
+
+def test_base_colour_texture_goes_to_the_diffuse_closure(empty_scene):
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    mat, shader = node_material("Textured", "ShaderNodeBsdfPrincipled", Metallic=0.0)
+    image = bpy.data.images.new("Checker", 4, 4)
+    texture = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    mat.node_tree.links.new(texture.outputs["Color"], shader.inputs[compat.principled_input("base_color")])
+    plane.data.materials.append(mat)
+    frame = export_current()
+    (exported,) = frame.scene.materials
+    assert len(frame.scene.textures) == 1
+    diffuse = [d for d in exported["closures"] if d["kind"] in ("diffuse", "principled_diffuse")]
+    assert len(diffuse) == 1 and diffuse[0]["texture"] == 0 and diffuse[0]["texture_target"] == "color"
+    assert all("texture" not in d for d in exported["closures"] if d not in diffuse)
