@@ -100,129 +100,294 @@ def approx(values, expected, rel=1e-5):
 
 # --- materials ------------------------------------------------------------------------------------------------
 
-def test_principled_maps_to_the_dominant_lobe(empty_scene):
-    glass, _ = node_material("G", "ShaderNodeBsdfPrincipled", Base_Color=(0.9, 1.0, 0.9, 1.0), Transmission=1.0,
-                             IOR=1.5, Roughness=0.0)
-    metal, _ = node_material("M", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.8, 0.3, 1.0), Metallic=1.0,
-                             Roughness=0.0)
-    plain, _ = node_material("D", "ShaderNodeBsdfPrincipled", Base_Color=(0.2, 0.4, 0.6, 1.0),
-                             Emission_Color=(1.0, 0.5, 0.0, 1.0), Emission_Strength=4.0)
-    g, m, d = (materials.convert_material(x) for x in (glass, metal, plain))
-    assert (g.kind, g.ior, g.notes) == ("glass", pytest.approx(1.5), [])
-    assert approx(g.color, (0.9, 1.0, 0.9))
-    assert m.kind == "mirror" and approx(m.color, (1.0, 0.8, 0.3)) and m.notes == []
-    assert d.kind == "diffuse" and approx(d.color, (0.2, 0.4, 0.6))
-    assert approx(d.emission, (4.0, 2.0, 0.0))
+def closures_of(spec, kind=None, label=None):
+    """The closure dicts the core gets, those of `kind` (and `label`) only when given."""
+    found = []
+    for d, c in zip(spec.core_arguments()["closures"], spec.closures):
+        if (kind is None or d["kind"] == kind) and (label is None or c.label == label):
+            found.append(d)
+    return found
 
 
-def test_principled_approximations_are_noted(empty_scene):
-    rough_metal, _ = node_material("RM", "ShaderNodeBsdfPrincipled", Metallic=0.7, Roughness=0.4)
-    spec = materials.convert_material(rough_metal)
-    assert spec.kind == "glossy" and spec.roughness == pytest.approx(0.4)
-    assert any("Metallic" in n for n in spec.notes)
-    assert not any("Roughness" in n for n in spec.notes), "a rough metal is rendered rough now"
+def one(spec, kind, label=None):
+    (d,) = closures_of(spec, kind, label)
+    return d
 
 
-def test_rough_metals_become_glossy_with_their_roughness(empty_scene):
-    gold, node = node_material("Gold", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.77, 0.34, 1.0), Metallic=1.0,
-                               Roughness=0.35)
-    node.distribution = 'GGX'            # the default of Blender 3.4 (4.0 made it Multiscatter GGX, noted)
-    brushed, node = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.3)
+v1_only = pytest.mark.skipif(compat.PRINCIPLED_V2, reason="Principled BSDF v1 is Blender 3.x's")
+
+
+@v1_only
+def test_principled_v1_lowers_as_cycles_3_4(empty_scene):
+    base = (0.8, 0.4, 0.2)
+    mat, node = node_material("P", "ShaderNodeBsdfPrincipled", Base_Color=(*base, 1.0), Metallic=0.25,
+                              Transmission=0.5, Specular=0.5, Specular_Tint=0.5, Roughness=0.3, Sheen=0.5,
+                              Sheen_Tint=0.5, Clearcoat=0.4, Clearcoat_Roughness=0.1, IOR=1.5,
+                              Transmission_Roughness=0.2)
     node.distribution = 'GGX'
-    polished, _ = node_material("Polished", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.05)
-    smooth_metal, _ = node_material("Chrome", "ShaderNodeBsdfPrincipled", Metallic=1.0, Roughness=0.05)
-    g, b, p, c = (materials.convert_material(x) for x in (gold, brushed, polished, smooth_metal))
-    assert g.kind == "glossy" and approx(g.color, (1.0, 0.77, 0.34)) and g.notes == []
-    assert g.roughness == pytest.approx(0.35)
-    assert b.kind == "glossy" and b.roughness == pytest.approx(0.3) and approx(b.color, (0.9, 0.9, 0.9))
-    assert b.notes == []
-    assert b.core_arguments()["roughness"] == pytest.approx(0.3) and b.core_arguments()["kind"] == "glossy"
-    assert "roughness 0.30" in b.describe()
-    # At or below 0.05 a metal is a perfect mirror, as Cycles users expect (alpha <= 0.0025).
-    assert (p.kind, p.notes) == ("mirror", []) and (c.kind, c.notes) == ("mirror", [])
+    spec = materials.convert_material(mat)
+    assert spec.notes == []
+    args = spec.core_arguments()
+    assert args["kind"] == "closures" and args["factors"] == [dict(kind="fresnel", value=pytest.approx(1.5))]
+    # svm_closure.h's weights.
+    diffuse_weight, transmission, specular_weight = 0.75 * 0.5, 0.5 * 0.75, 1.0 - 0.5 * 0.75
+    d = one(spec, "principled_diffuse")
+    assert approx(d["color"], tuple(b * diffuse_weight for b in base)) and d["roughness"] == pytest.approx(0.3)
+    lum = 0.2126729 * 0.8 + 0.7151522 * 0.4 + 0.0721750 * 0.2
+    sheen = one(spec, "sheen")
+    assert approx(sheen["color"], tuple(0.5 * diffuse_weight * (0.5 + 0.5 * b / lum) for b in base), rel=1e-4)
+    s = one(spec, "reflection", "specular")
+    tint = tuple(0.5 + 0.5 * b / 0.5 for b in base)              # luminance approx 0.3/0.6/0.1 of base = 0.5
+    cspec0 = tuple(0.5 * 0.08 * t * 0.75 + b * 0.25 for t, b in zip(tint, base))
+    assert approx(s["color"], (specular_weight,) * 3) and approx(s["specular_color"], cspec0)
+    assert (s["fresnel"], s["distribution"]) == ("principled", "ggx")
+    assert s["ior"] == pytest.approx(2.0 / (1.0 - math.sqrt(0.08 * 0.5)) - 1.0)
+    assert s["alpha_x"] == pytest.approx(0.09) and s["alpha_y"] == pytest.approx(0.09)
+    r = one(spec, "reflection", "glass reflection")
+    assert approx(r["color"], (transmission,) * 3) and r["factors_on"] == [0] and r["fresnel"] == "principled"
+    assert approx(r["specular_color"], tuple(b * 0.5 + 0.5 for b in base)) and r["ior"] == pytest.approx(1.5)
+    t = one(spec, "refraction")
+    assert approx(t["color"], tuple(b * transmission for b in base)) and t["factors_off"] == [0]
+    refraction_roughness = 1.0 - (1.0 - 0.3) * (1.0 - 0.2)                # 3.4's Transmission Roughness
+    assert t["alpha_x"] == pytest.approx(refraction_roughness ** 2) and t["ior"] == pytest.approx(1.5)
+    c = one(spec, "reflection", "clearcoat")
+    assert approx(c["color"], (0.25 * 0.4,) * 3) and (c["distribution"], c["fresnel"]) == ("gtr1", "dielectric")
+    assert c["alpha_x"] == pytest.approx(0.01) and c["ior"] == pytest.approx(1.5)
+    assert "principled" in spec.describe() and "clearcoat" in spec.describe()
 
 
-def test_glossy_distributions_other_than_ggx_are_noted(empty_scene):
-    beckmann, node = node_material("Beck", "ShaderNodeBsdfGlossy", Roughness=0.4)
-    node.distribution = 'BECKMANN'
-    multi, node = node_material("Multi", "ShaderNodeBsdfGlossy", Roughness=0.4)
+@v1_only
+def test_principled_v1_alpha_anisotropy_emission_subsurface(empty_scene):
+    mat, node = node_material("A", "ShaderNodeBsdfPrincipled", Base_Color=(0.5, 0.5, 0.5, 1.0), Alpha=0.25,
+                              Emission=(1.0, 0.5, 0.0, 1.0), Emission_Strength=4.0, Roughness=0.5,
+                              Anisotropic=0.5, Anisotropic_Rotation=0.1, Subsurface=0.5,
+                              Subsurface_Color=(1.0, 0.0, 0.0, 1.0))
     node.distribution = 'MULTI_GGX'
-    principled, node = node_material("PM", "ShaderNodeBsdfPrincipled", Metallic=1.0, Roughness=0.6)
-    node.distribution = 'MULTI_GGX'
-    for mat, label in ((beckmann, "Beckmann"), (multi, "Multiscatter GGX"), (principled, "Multiscatter GGX")):
-        spec = materials.convert_material(mat)
-        assert spec.kind == "glossy" and any(label in n and "GGX" in n for n in spec.notes), spec.notes
-    # A smooth one is a mirror whatever its distribution: nothing to note.
-    smooth, node = node_material("SmoothBeck", "ShaderNodeBsdfGlossy", Roughness=0.0)
-    node.distribution = 'BECKMANN'
-    assert materials.convert_material(smooth).notes == []
+    spec = materials.convert_material(mat)
+    assert approx(one(spec, "transparent")["color"], (0.75,) * 3)
+    assert approx(one(spec, "principled_diffuse")["color"], (0.25 * 0.75, 0.25 * 0.25, 0.25 * 0.25))
+    assert approx(spec.emission, (1.0, 0.5, 0.0))                         # x alpha
+    s = one(spec, "reflection", "specular")
+    aspect = math.sqrt(1.0 - 0.5 * 0.9)
+    assert s["alpha_x"] == pytest.approx(0.25 / aspect) and s["alpha_y"] == pytest.approx(0.25 * aspect)
+    assert s["distribution"] == "multi_ggx" and approx(s["color"], (0.25,) * 3)
+    assert any("rotation" in n for n in spec.notes) and any("subsurface" in n for n in spec.notes)
 
 
-def test_rough_glass_is_still_rendered_smooth_with_a_note(empty_scene):
-    glass, _ = node_material("Frosted", "ShaderNodeBsdfGlass", IOR=1.5, Roughness=0.3)
-    principled, _ = node_material("PFrosted", "ShaderNodeBsdfPrincipled", Transmission=1.0, Roughness=0.3)
-    for mat in (glass, principled):
-        spec = materials.convert_material(mat)
-        assert spec.kind == "glass" and any("Roughness 0.30" in n and "smooth" in n for n in spec.notes)
+def test_principled_metal_and_glass(empty_scene):
+    metal, node = node_material("M", "ShaderNodeBsdfPrincipled", Base_Color=(1.0, 0.8, 0.3, 1.0), Metallic=1.0,
+                                Roughness=0.0)
+    glass, gnode = node_material("G", "ShaderNodeBsdfPrincipled", Base_Color=(0.9, 1.0, 0.9, 1.0),
+                                 Transmission=1.0, IOR=1.5, Roughness=0.0)
+    m, g = materials.convert_material(metal), materials.convert_material(glass)
+    (r,) = closures_of(m)
+    assert r["kind"] == "reflection" and r["distribution"] == "sharp"
+    assert approx(r["specular_color"], (1.0, 0.8, 0.3))
+    t = one(g, "refraction")
+    assert t["distribution"] == "sharp" and approx(t["color"], (0.9, 1.0, 0.9)) and t["factors_off"] == [0]
+    assert g.core_arguments()["factors"][0]["kind"] == "fresnel"
+    assert not closures_of(g, "diffuse") and not closures_of(g, "principled_diffuse")
 
 
-def test_glossy_roughness_reaches_the_core(empty_scene):
-    add_camera(empty_scene)
-    bpy.ops.mesh.primitive_plane_add(size=2.0)
-    plane = bpy.context.active_object
-    metal, _ = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.8, 0.6, 0.4, 1.0), Roughness=0.45)
-    plane.data.materials.append(metal)
-    frame = export_current()
-    (exported,) = frame.scene.materials
-    assert exported["kind"] == "glossy" and exported["roughness"] == pytest.approx(0.45)
-    assert approx(exported["color"], (0.8, 0.6, 0.4))
+def test_glossy_distributions_and_sharp_threshold(empty_scene):
+    specs = {}
+    for dist in ("GGX", "BECKMANN", "MULTI_GGX", "ASHIKHMIN_SHIRLEY"):
+        mat, node = node_material("Gl" + dist, "ShaderNodeBsdfGlossy", Color=(0.9, 0.8, 0.7, 1.0), Roughness=0.3)
+        node.distribution = dist
+        specs[dist] = materials.convert_material(mat)
+    for dist, expected in (("GGX", "ggx"), ("BECKMANN", "beckmann"), ("MULTI_GGX", "multi_ggx")):
+        r = one(specs[dist], "reflection")
+        assert (r["distribution"], r["fresnel"]) == (expected, "none") and specs[dist].notes == []
+        assert r["alpha_x"] == pytest.approx(0.09) and approx(r["color"], (0.9, 0.8, 0.7))
+    assert one(specs["ASHIKHMIN_SHIRLEY"], "reflection")["distribution"] == "ggx"
+    assert any("Ashikhmin" in n for n in specs["ASHIKHMIN_SHIRLEY"].notes)
+    polished, node = node_material("Polished", "ShaderNodeBsdfGlossy", Roughness=0.05)
+    assert one(materials.convert_material(polished), "reflection")["distribution"] == "sharp"
+
+
+def test_anisotropic_glossy_alphas(empty_scene):
+    idname = "ShaderNodeBsdfAnisotropic" if not compat.PRINCIPLED_V2 else "ShaderNodeBsdfGlossy"
+    for anisotropy in (0.5, -0.5):
+        mat, node = node_material("An", idname, Roughness=0.4, Anisotropy=anisotropy)
+        node.distribution = 'GGX'
+        r = one(materials.convert_material(mat), "reflection")
+        a = 0.16
+        expected = (a * 0.5, a / 0.5) if anisotropy > 0 else (a / 0.5, a * 0.5)
+        assert (r["alpha_x"], r["alpha_y"]) == pytest.approx(expected)
+
+
+def test_glass_splits_by_a_fresnel_factor(empty_scene):
+    smooth, node = node_material("Ga", "ShaderNodeBsdfGlass", Color=(1.0, 0.9, 0.8, 1.0), IOR=1.33, Roughness=0.0)
+    node.distribution = 'GGX'
+    frosted, node = node_material("Frosted", "ShaderNodeBsdfGlass", IOR=1.5, Roughness=0.3)
+    node.distribution = 'GGX'
+    s, f = materials.convert_material(smooth), materials.convert_material(frosted)
+    assert s.notes == [] and f.notes == []
+    assert s.core_arguments()["factors"] == [dict(kind="fresnel", value=pytest.approx(1.33))]
+    r, t = one(s, "reflection"), one(s, "refraction")
+    assert (r["distribution"], t["distribution"]) == ("sharp", "sharp") and r["fresnel"] == "none"
+    assert r["factors_on"] == [0] and t["factors_off"] == [0] and approx(t["color"], (1.0, 0.9, 0.8))
+    r, t = one(f, "reflection"), one(f, "refraction")
+    assert (r["distribution"], t["distribution"]) == ("ggx", "ggx") and t["alpha_x"] == pytest.approx(0.09)
+    assert "IOR 1.50" in f.describe() and "rough" in f.describe()
+    refraction, node = node_material("Re", "ShaderNodeBsdfRefraction", IOR=1.5, Roughness=0.0)
+    r = materials.convert_material(refraction)
+    assert [d["kind"] for d in closures_of(r)] == ["refraction"] and r.core_arguments()["factors"] == []
 
 
 def test_basic_shaders(empty_scene):
-    diffuse, _ = node_material("Di", "ShaderNodeBsdfDiffuse", Color=(0.5, 0.25, 0.125, 1.0))
-    glossy, _ = node_material("Gl", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.0)
-    glass, _ = node_material("Ga", "ShaderNodeBsdfGlass", Color=(1.0, 1.0, 1.0, 1.0), IOR=1.33, Roughness=0.0)
-    light, _ = node_material("Em", "ShaderNodeEmission", Color=(1.0, 0.5, 0.25, 1.0), Strength=10.0)
-    d, gl, ga, em = (materials.convert_material(x) for x in (diffuse, glossy, glass, light))
-    assert d.kind == "diffuse" and approx(d.color, (0.5, 0.25, 0.125)) and d.notes == []
-    assert gl.kind == "mirror" and approx(gl.color, (0.9, 0.9, 0.9)) and gl.notes == []
-    assert ga.kind == "glass" and ga.ior == pytest.approx(1.33) and ga.notes == []
-    # An Emission shader reflects nothing: black diffuse plus the emitted radiance colour x strength.
-    assert em.kind == "diffuse" and approx(em.color, (0, 0, 0)) and approx(em.emission, (10.0, 5.0, 2.5))
+    made = {
+        "diffuse": node_material("Di", "ShaderNodeBsdfDiffuse", Color=(0.5, 0.25, 0.125, 1.0), Roughness=0.5),
+        "translucent": node_material("Tr", "ShaderNodeBsdfTranslucent", Color=(0.3, 0.3, 0.3, 1.0)),
+        "transparent": node_material("Tp", "ShaderNodeBsdfTransparent", Color=(0.9, 0.9, 0.9, 1.0)),
+        "emission": node_material("Em", "ShaderNodeEmission", Color=(1.0, 0.5, 0.25, 1.0), Strength=10.0),
+        "holdout": node_material("Ho", "ShaderNodeHoldout"),
+        "subsurface": node_material("Ss", "ShaderNodeSubsurfaceScattering", Color=(0.7, 0.6, 0.5, 1.0)),
+    }
+    if not compat.PRINCIPLED_V2:
+        made["velvet"] = node_material("Ve", "ShaderNodeBsdfVelvet", Color=(0.4, 0.4, 0.4, 1.0), Sigma=0.7)
+    spec = {k: materials.convert_material(m) for k, (m, _) in made.items()}
+    d = one(spec["diffuse"], "diffuse")
+    assert approx(d["color"], (0.5, 0.25, 0.125)) and d["roughness"] == pytest.approx(0.5)
+    assert spec["diffuse"].notes == []
+    assert approx(one(spec["translucent"], "translucent")["color"], (0.3,) * 3)
+    assert approx(one(spec["transparent"], "transparent")["color"], (0.9,) * 3)
+    # An Emission shader reflects nothing: a black surface plus the emitted radiance colour x strength.
+    assert approx(spec["emission"].emission, (10.0, 5.0, 2.5))
+    assert all(max(d["color"]) == 0.0 for d in closures_of(spec["emission"]))
+    assert spec["holdout"].core_arguments()["holdout"] is True
+    assert any("subsurface" in n for n in spec["subsurface"].notes)
+    if "velvet" in spec:
+        v = one(spec["velvet"], "velvet")
+        assert v["roughness"] == pytest.approx(0.7) and approx(v["color"], (0.4,) * 3)
 
 
-def test_mix_with_emission_is_exact(empty_scene):
-    mat, _ = node_material("Mix", "ShaderNodeMixShader", Fac=0.25)
+def _mix_material(name, fac=0.5):
+    mat, mix = node_material(name, "ShaderNodeMixShader", Fac=fac)
     tree = mat.node_tree
-    mix = tree.nodes["Mix Shader"]
     diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
     diffuse.inputs["Color"].default_value = (0.8, 0.4, 0.2, 1.0)
+    glossy = tree.nodes.new("ShaderNodeBsdfGlossy")
+    glossy.inputs["Roughness"].default_value = 0.3
+    tree.links.new(diffuse.outputs[0], mix.inputs[1])
+    tree.links.new(glossy.outputs[0], mix.inputs[2])
+    return mat, mix, tree
+
+
+def test_mix_and_add_with_constant_factors(empty_scene):
+    mat, mix, tree = _mix_material("DiffGloss", 0.3)
+    spec = materials.convert_material(mat)
+    assert spec.notes == [] and spec.core_arguments()["factors"] == []
+    assert approx(one(spec, "diffuse")["color"], (0.56, 0.28, 0.14))
+    assert approx(one(spec, "reflection")["color"], (0.3 * 0.8,) * 3)      # Glossy's default colour 0.8
+    add = tree.nodes.new("ShaderNodeAddShader")
     emission = tree.nodes.new("ShaderNodeEmission")
     emission.inputs["Strength"].default_value = 8.0
-    tree.links.new(diffuse.outputs[0], mix.inputs[1])
-    tree.links.new(emission.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], add.inputs[0])
+    tree.links.new(emission.outputs[0], add.inputs[1])
+    tree.links.new(add.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
     spec = materials.convert_material(mat)
-    assert spec.kind == "diffuse" and spec.notes == []
-    assert approx(spec.color, (0.6, 0.3, 0.15))              # 0.75 x the diffuse albedo
-    assert approx(spec.emission, (2.0, 2.0, 2.0))            # 0.25 x 8
+    assert approx(spec.emission, (8.0, 8.0, 8.0)) and approx(one(spec, "diffuse")["color"], (0.56, 0.28, 0.14))
+    # Two diffuse shaders mixed are one closure.
+    twin, mix = node_material("Twin", "ShaderNodeMixShader", Fac=0.25)
+    for i, c in ((1, 0.4), (2, 0.8)):
+        node = twin.node_tree.nodes.new("ShaderNodeBsdfDiffuse")
+        node.inputs["Color"].default_value = (c, c, c, 1.0)
+        twin.node_tree.links.new(node.outputs[0], mix.inputs[i])
+    (d,) = closures_of(materials.convert_material(twin))
+    assert approx(d["color"], (0.75 * 0.4 + 0.25 * 0.8,) * 3)
+
+
+def test_mix_by_fresnel_and_layer_weight_is_view_dependent(empty_scene):
+    mat, mix, tree = _mix_material("Coated")
+    fresnel = tree.nodes.new("ShaderNodeFresnel")
+    fresnel.inputs["IOR"].default_value = 1.6
+    reroute = tree.nodes.new("NodeReroute")
+    tree.links.new(fresnel.outputs[0], reroute.inputs[0])
+    tree.links.new(reroute.outputs[0], mix.inputs["Fac"])
+    spec = materials.convert_material(mat)
+    assert spec.notes == []
+    assert spec.core_arguments()["factors"] == [dict(kind="fresnel", value=pytest.approx(1.6))]
+    d, r = one(spec, "diffuse"), one(spec, "reflection")
+    assert d["factors_off"] == [0] and r["factors_on"] == [0] and approx(d["color"], (0.8, 0.4, 0.2))
+    for output, kind in (("Fresnel", "layer_fresnel"), ("Facing", "layer_facing")):
+        layer = tree.nodes.new("ShaderNodeLayerWeight")
+        layer.inputs["Blend"].default_value = 0.3
+        tree.links.new(layer.outputs[output], mix.inputs["Fac"])
+        spec = materials.convert_material(mat)
+        assert spec.core_arguments()["factors"] == [dict(kind=kind, value=pytest.approx(0.3))]
+    # Nested: the same Fresnel node above two mixes shares one factor; bits combine.
+    outer = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(fresnel.outputs[0], mix.inputs["Fac"])
+    tree.links.new(fresnel.outputs[0], outer.inputs["Fac"])
+    tree.links.new(mix.outputs[0], outer.inputs[1])
+    tree.links.new(tree.nodes.new("ShaderNodeBsdfTransparent").outputs[0], outer.inputs[2])
+    tree.links.new(outer.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    spec = materials.convert_material(mat)
+    assert len(spec.core_arguments()["factors"]) == 1
+    assert one(spec, "diffuse")["factors_off"] == [0] and one(spec, "transparent")["factors_on"] == [0]
+    r = one(spec, "reflection")
+    assert r["factors_on"] == [0] and r["factors_off"] == [0]
+    assert any("applied once" in n for n in spec.notes)        # the diffuse's (1 - F)^2: bits OR together
+    # Anything else driving Fac: its unconnected value, noted.
+    mat, mix, tree = _mix_material("Math", 0.3)
+    tree.links.new(tree.nodes.new("ShaderNodeMath").outputs[0], mix.inputs["Fac"])
+    spec = materials.convert_material(mat)
+    assert any("Math" in n for n in spec.notes) and approx(one(spec, "diffuse")["color"], (0.56, 0.28, 0.14))
+
+
+def _group(name, inner_type):
+    """A node group around one shader node of `inner_type` whose Color comes from the group's input."""
+    group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    compat.new_group_socket(group, "INPUT", "NodeSocketColor", "Tint")
+    compat.new_group_socket(group, "OUTPUT", "NodeSocketShader", "Shader")
+    group_in = group.nodes.new("NodeGroupInput")
+    group_out = group.nodes.new("NodeGroupOutput")
+    shader = group.nodes.new(inner_type)
+    group.links.new(group_in.outputs["Tint"], shader.inputs["Color"])
+    group.links.new(shader.outputs[0], group_out.inputs["Shader"])
+    return group
+
+
+def test_shaders_inside_nested_groups_are_converted(empty_scene):
+    inner = _group("InnerDiffuse", "ShaderNodeBsdfDiffuse")
+    outer = bpy.data.node_groups.new("Outer", "ShaderNodeTree")
+    compat.new_group_socket(outer, "INPUT", "NodeSocketColor", "Tint")
+    compat.new_group_socket(outer, "OUTPUT", "NodeSocketShader", "Shader")
+    o_in, o_out = outer.nodes.new("NodeGroupInput"), outer.nodes.new("NodeGroupOutput")
+    node = outer.nodes.new("ShaderNodeGroup")
+    node.node_tree = inner
+    outer.links.new(o_in.outputs["Tint"], node.inputs["Tint"])
+    outer.links.new(node.outputs["Shader"], o_out.inputs["Shader"])
+
+    mat = bpy.data.materials.new("Grouped")
+    enable_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    group_node = tree.nodes.new("ShaderNodeGroup")
+    group_node.node_tree = outer
+    rgb = tree.nodes.new("ShaderNodeRGB")
+    rgb.outputs[0].default_value = (0.1, 0.6, 0.3, 1.0)
+    tree.links.new(rgb.outputs[0], group_node.inputs["Tint"])
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(group_node.outputs["Shader"], output.inputs["Surface"])
+    spec = materials.convert_material(mat)
+    assert spec.notes == [] and approx(one(spec, "diffuse")["color"], (0.1, 0.6, 0.3))
+    # Unlinked, the Group node's own input value.
+    tree.links.remove(group_node.inputs["Tint"].links[0])
+    group_node.inputs["Tint"].default_value = (0.2, 0.2, 0.9, 1.0)
+    assert approx(one(materials.convert_material(mat), "diffuse")["color"], (0.2, 0.2, 0.9))
 
 
 def test_unsupported_setups_fall_back_with_a_note(empty_scene):
-    mix, _ = node_material("DiffGloss", "ShaderNodeMixShader", Fac=0.3)
-    tree = mix.node_tree
-    tree.links.new(tree.nodes.new("ShaderNodeBsdfDiffuse").outputs[0], tree.nodes["Mix Shader"].inputs[1])
-    tree.links.new(tree.nodes.new("ShaderNodeBsdfGlossy").outputs[0], tree.nodes["Mix Shader"].inputs[2])
     textured, shader = node_material("Tex", "ShaderNodeBsdfPrincipled")
     textured.node_tree.links.new(textured.node_tree.nodes.new("ShaderNodeTexChecker").outputs["Color"],
                                  shader.inputs["Base Color"])
     toon, _ = node_material("Toon", "ShaderNodeBsdfToon", Color=(0.1, 0.2, 0.3, 1.0))
-
-    m = materials.convert_material(mix)
-    assert m.kind == "diffuse" and any("Mix Shader" in n for n in m.notes)
     t = materials.convert_material(textured)
-    assert t.kind == "diffuse" and any("Checker" in n for n in t.notes)
+    assert any("Checker" in n for n in t.notes)
     o = materials.convert_material(toon)
-    assert o.kind == "diffuse" and approx(o.color, (0.1, 0.2, 0.3)) and any("Toon" in n for n in o.notes)
+    assert approx(one(o, "diffuse")["color"], (0.1, 0.2, 0.3)) and any("Toon" in n for n in o.notes)
 
 
 def test_material_without_nodes_uses_its_viewport_colour(empty_scene):
@@ -231,20 +396,60 @@ def test_material_without_nodes_uses_its_viewport_colour(empty_scene):
     if compat.has_use_nodes_switch(mat):
         mat.use_nodes = False
         spec = materials.convert_material(mat)
-        assert spec.kind == "diffuse" and approx(spec.color, (0.3, 0.6, 0.9))
+        assert approx(one(spec, "diffuse")["color"], (0.3, 0.6, 0.9))
     else:   # Blender 5.0: every material renders its node tree (a new one: Principled, Base Color 0.8)
         spec = materials.convert_material(mat)
-        assert spec.kind == "diffuse" and approx(spec.color, (0.8, 0.8, 0.8))
+        assert max(one(spec, "diffuse")["color"]) > 0.0
     assert materials.convert_material(None).name == materials.DEFAULT_MATERIAL_NAME
 
 
-def test_colours_are_clamped_for_the_core(empty_scene):
+def test_colours_are_clamped_and_nans_replaced(empty_scene):
     mat, _ = node_material("Hot", "ShaderNodeBsdfDiffuse", Color=(2.0, 0.5, -1.0, 1.0))
     spec = materials.convert_material(mat)
-    assert approx(spec.color, (1.0, 0.5, 0.0)) and any("clamped" in n for n in spec.notes)
+    assert approx(one(spec, "diffuse")["color"], (1.0, 0.5, 0.0)) and any("clamped" in n for n in spec.notes)
+    nan, _ = node_material("NaN", "ShaderNodeBsdfGlossy", Roughness=float("nan"))
+    spec = materials.convert_material(nan)
+    r = one(spec, "reflection")
+    assert all(math.isfinite(v) for v in (r["alpha_x"], r["alpha_y"])) and any("not a number" in n
+                                                                              for n in spec.notes)
 
 
-# --- meshes -------------------------------------------------------------------------------------------------
+def test_too_many_closures_are_reduced_with_a_note(empty_scene):
+    mat = bpy.data.materials.new("Many")
+    enable_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    previous = None
+    for i in range(12):
+        glossy = tree.nodes.new("ShaderNodeBsdfGlossy")
+        glossy.inputs["Roughness"].default_value = 0.1 + 0.05 * i       # all different: no merging
+        if previous is None:
+            previous = glossy
+            continue
+        add = tree.nodes.new("ShaderNodeAddShader")
+        tree.links.new(previous.outputs[0], add.inputs[0])
+        tree.links.new(glossy.outputs[0], add.inputs[1])
+        previous = add
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(previous.outputs[0], output.inputs["Surface"])
+    spec = materials.convert_material(mat)
+    assert len(closures_of(spec)) == materials.MAX_DIRECTIONAL and any("dropped" in n for n in spec.notes)
+
+
+def test_closures_reach_the_core(empty_scene):
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    metal, node = node_material("Brushed", "ShaderNodeBsdfGlossy", Color=(0.8, 0.6, 0.4, 1.0), Roughness=0.45)
+    node.distribution = 'GGX'
+    plane.data.materials.append(metal)
+    frame = export_current()
+    (exported,) = frame.scene.materials
+    assert exported["kind"] == "closures"
+    (closure,) = exported["closures"]
+    assert closure["kind"] == "reflection" and closure["alpha_x"] == pytest.approx(0.45 ** 2)
+    assert approx(closure["color"], (0.8, 0.6, 0.4))
+
 
 def test_meshes_are_exported_evaluated_with_their_slots(empty_scene):
     add_camera(empty_scene)
@@ -437,12 +642,11 @@ def test_principled_inputs_of_this_blender_are_read(empty_scene):
     coat, node = node_material("Coated", "ShaderNodeBsdfPrincipled", Base_Color=(0.2, 0.3, 0.4, 1.0),
                                Subsurface=0.5, Coat=0.5, Sheen=0.5)
     spec = materials.convert_material(coat)
-    assert spec.kind == "diffuse"
-    assert any(compat.principled_input("coat") in n for n in spec.notes)
-    assert any(compat.principled_input("sheen") in n for n in spec.notes)
+    labels = [c.label for c in spec.closures]
+    assert any(label in ("clearcoat", "coat") for label in labels) and "sheen" in labels
     assert any("subsurface" in n for n in spec.notes)
-    if compat.principled_input("subsurface_color") is None:   # v2: subsurface scatters Base Color itself
-        assert approx(spec.color, (0.2, 0.3, 0.4))
+    diffuse = [d for d in closures_of(spec) if d["kind"] in ("diffuse", "principled_diffuse")]
+    assert len(diffuse) == 1 and max(diffuse[0]["color"]) > 0.0
 
 
 @pytest.mark.skipif(bpy.app.version < (4, 3, 0), reason="the Metallic BSDF node came with Blender 4.3")
@@ -451,7 +655,9 @@ def test_metallic_bsdf_is_a_metal(empty_scene):
                               Edge_Tint=(1.0, 1.0, 1.0, 1.0))
     node.distribution = 'GGX'
     spec = materials.convert_material(f82)
-    assert spec.kind == "glossy" and approx(spec.color, (0.9, 0.6, 0.3)) and spec.notes == []
+    r = one(spec, "reflection")
+    assert (r["fresnel"], r["distribution"]) == ("schlick", "ggx") and spec.notes == []
+    assert approx(r["specular_color"], (0.9, 0.6, 0.3)) and r["alpha_x"] == pytest.approx(0.09)
     conductor, node = node_material("Gold", "ShaderNodeBsdfMetallic", Roughness=0.0)
     node.fresnel_type = 'PHYSICAL_CONDUCTOR'
     node.inputs["IOR"].default_value = (0.18, 0.42, 1.37)
@@ -459,5 +665,24 @@ def test_metallic_bsdf_is_a_metal(empty_scene):
     spec = materials.convert_material(conductor)
     expected = tuple(((n - 1) ** 2 + k * k) / ((n + 1) ** 2 + k * k)
                      for n, k in zip((0.18, 0.42, 1.37), (3.42, 2.35, 1.77)))
-    assert spec.kind == "mirror" and approx(spec.color, expected, rel=1e-4)
+    r = one(spec, "reflection")
+    assert r["distribution"] == "sharp" and approx(r["specular_color"], expected, rel=1e-4)
     assert any("conductor" in n for n in spec.notes)
+
+
+def test_base_colour_texture_goes_to_the_diffuse_closure(empty_scene):
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    mat, shader = node_material("Textured", "ShaderNodeBsdfPrincipled", Metallic=0.0)
+    image = bpy.data.images.new("Checker", 4, 4)
+    texture = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    mat.node_tree.links.new(texture.outputs["Color"], shader.inputs[compat.principled_input("base_color")])
+    plane.data.materials.append(mat)
+    frame = export_current()
+    (exported,) = frame.scene.materials
+    assert len(frame.scene.textures) == 1
+    diffuse = [d for d in exported["closures"] if d["kind"] in ("diffuse", "principled_diffuse")]
+    assert len(diffuse) == 1 and diffuse[0]["texture"] == 0 and diffuse[0]["texture_target"] == "color"
+    assert all("texture" not in d for d in exported["closures"] if d not in diffuse)

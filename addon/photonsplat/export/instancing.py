@@ -149,19 +149,16 @@ class MaterialTable:
         key = None if material is None else material.name_full
         if key not in self._ids:
             spec = materials.convert_material(material)
-            arguments = spec.core_arguments()
-            if spec.texture is not None:
-                arguments["texture"] = self._texture_index(spec)
+            arguments = spec.core_arguments(texture_index=lambda reference: self._texture_index(spec, reference))
             self._ids[key] = self._core_scene.add_material(**arguments)
             self.emissive = self.emissive or max(spec.emission) > 0.0
             if spec.notes:
                 self._notes.append(f"Material '{spec.name}': " + "; ".join(unique(spec.notes)))
         return self._ids[key]
 
-    def _texture_index(self, spec):
-        """Core index of the image of `spec.texture` (added once per image); a failure to read it becomes a note
-        and the material keeps its plain colour."""
-        reference = spec.texture
+    def _texture_index(self, spec, reference):
+        """Core index of the image of `reference` (added once per image), a texture of the material `spec`; a
+        failure to read it becomes a note and the closure keeps a plain colour (index -1)."""
         if reference.key not in self._textures:
             try:
                 self._textures[reference.key] = textures.add_texture(self._core_scene, reference)

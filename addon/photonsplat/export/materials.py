@@ -1,104 +1,205 @@
-"""Blender materials -> the core's four surface types (diffuse, mirror, glass, glossy) plus emission.
+"""Blender materials -> the core's closures: a material is a weighted sum of closures, as Cycles builds one.
 
-The core knows only:
-  diffuse  Lambertian reflection, albedo = colour
-  mirror   perfect specular reflection, Fresnel-Schlick with F0 = colour (a smooth metal)
-  glass    smooth dielectric with index `ior`, refracted light tinted by colour
-  glossy   GGX microfacet reflection (a rough metal), Fresnel-Schlick with F0 = colour, alpha = roughness^2 as
-           in Cycles; the core itself renders roughness <= ROUGHNESS_SHARP as a mirror
-and every surface may also emit radiance `emission` (W/(sr m^2), both faces, as Cycles' Emission shader).
+We read the node tree Cycles would render (get_output_node('CYCLES')) and lower the shader plugged into the
+Surface input to the list of closures that Cycles 3.4's svm/svm_closure.h allocates for it, with the same
+weights and parameters (closures.h lists the kinds the core renders):
 
-We read the node tree Cycles would render (get_output_node('CYCLES')) and map the shader plugged into the
-Surface input. Whatever cannot be represented exactly is replaced by the nearest supported surface, and a
-note says so; the sync (export/sync.py) turns the notes into one warning per material in its report.
+  Principled BSDF v1   principled_diffuse (Base Color, blended towards Subsurface Color by Subsurface), sheen,
+                       the specular reflection (fresnel "principled": cspec0 and the IOR from Specular),
+                       transmission as reflection + refraction split by a Fresnel factor, clearcoat (GTR1,
+                       dielectric 1.5, weight 0.25 x Clearcoat), Alpha as a transparent closure.
+  Principled BSDF v2   the same kinds, approximately (its energy-conserving layering is not; notes say what)
+  Diffuse              diffuse (Oren-Nayar sigma = Roughness)
+  Glossy, Anisotropic  reflection without Fresnel (distribution from the node, anisotropic alphas as Cycles)
+  Metallic (4.3+)      reflection with Schlick's Fresnel from Base Color (or a conductor's normal reflectance)
+  Glass                reflection + refraction split by a Fresnel factor of its IOR
+  Refraction           refraction only
+  Translucent, Transparent, Velvet, Emission, Holdout   their closures (holdout: the whole material)
+  Mix, Add Shader      the two lists, weighted by a constant Fac, or by a view-dependent factor when Fac comes
+                       from a Fresnel or Layer Weight node (evaluated by the core at each hit)
+  node groups          followed inside, and back out through their Group Input sockets
 
-Known approximations that are NOT warned about, because they apply to nearly every material:
-  - Principled BSDF's dielectric specular layer (Specular input, about 4 % reflectance) is dropped, and its
-    diffuse lobe is rendered as Lambert (Cycles adds a slight retro-reflection depending on Roughness).
-  - Roughness below ROUGHNESS_SHARP is rendered as a perfectly smooth interface (Cycles' alpha = r^2 is then
-    below 0.0025, visually sharp).
-  - Glossy BSDF and the Principled metal lobe are single-scatter GGX with Cycles 3.4's Smith shadowing. The
-    node's distribution is otherwise ignored: Beckmann and Ashikhmin-Shirley are rendered as GGX (noted), and
-    Multiscatter GGX without its multiple-scattering energy (slightly darker at high roughness; noted).
+Microfacet closures with Blender roughness <= ROUGHNESS_SHARP are exported as distribution "sharp" (a perfect
+mirror or refraction, which the core follows to focus caustics): Cycles' alpha = r^2 is then below 0.0025.
 
-Rough glass (and Refraction BSDF) stays perfectly smooth: the core has no rough dielectric; a note says so.
-
-Colours (Principled Base Color, the Color of Diffuse, Glossy and Glass) may come from an Image Texture node
-plugged in directly: the core then looks the image up at the hit's UV (export/textures.py). Any other node
-driving an input (a Mix RGB, a Math node, a texture behind a Mapping node's output...) is not interpreted:
-the socket's unconnected value is used and a note says so.
+Colours may come from an Image Texture node plugged in directly: the core looks the image up at the hit's UV
+(export/textures.py). Any other node driving an input (a Mix RGB, a Math node...) is not interpreted: the
+socket's unconnected value is used and a note says so. Each material's notes list only what is still
+approximated; the sync (export/sync.py) reports them and the material panel shows them.
 """
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .. import compat
 from . import textures
 
-# Above this roughness a glossy or glass surface visibly blurs in Cycles: a metal becomes "glossy" (the core's
-# own threshold for a mirror is the same number); glass is still rendered sharp, with a warning.
+# Blender roughness at or below which a microfacet closure is a perfect mirror or refraction (the core's
+# kGlossyMirrorRoughness).
 ROUGHNESS_SHARP = 0.05
-
-# The default of the core's add_material(roughness=...), used by every kind that has none.
-DEFAULT_ROUGHNESS = 0.5
 
 # Cycles renders objects without a material with a plain grey diffuse surface; so do we.
 DEFAULT_COLOR = (0.8, 0.8, 0.8)
 DEFAULT_MATERIAL_NAME = "Photon Splat default"
 
 BLACK = (0.0, 0.0, 0.0)
+WHITE = (1.0, 1.0, 1.0)
+
+# The core's limits (closures.h, materials.h).
+MAX_CLOSURES = 16
+MAX_FACTORS = 16
+MAX_DIRECTIONAL = 8        # non-delta closures other than Lambert diffuse
+
+# Cycles drops closures whose weight is below this (CLOSURE_WEIGHT_CUTOFF).
+WEIGHT_CUTOFF = 1e-5
+
+# Rec. 709 luminance, Cycles' linear_rgb_to_gray for the default scene-linear space (Principled sheen tint).
+_LUMINANCE = (0.2126729, 0.7151522, 0.0721750)
+
+
+@dataclass
+class Closure:
+    """One closure as the core's add_material(closures=[...]) takes it. Factors are (kind, value) keys here; the
+    material turns them into indices. `texture` is a textures.TextureRef (the sync makes it an index)."""
+    kind: str
+    color: tuple = DEFAULT_COLOR
+    distribution: str = "ggx"
+    fresnel: str = "none"
+    specular_color: tuple = BLACK
+    roughness: float = 0.0
+    alpha_x: float = 0.0
+    alpha_y: float = 0.0
+    ior: float = 1.45
+    texture: object = None
+    texture_target: str = "color"
+    factors_on: tuple = ()
+    factors_off: tuple = ()
+    label: str = ""            # what it is, for describe(): "diffuse", "specular", "clearcoat"...
+
+    def is_delta(self):
+        return self.kind == "transparent" or (self.kind in ("reflection", "refraction")
+                                              and self.distribution == "sharp")
+
+    def is_lambert(self):
+        return self.kind == "diffuse" and self.roughness == 0.0
+
+    def weight(self):
+        return max(self.color)
+
+    def merge_key(self):
+        """Closures equal but for their colour add up to one."""
+        texture = None if self.texture is None else self.texture.key
+        return (self.kind, self.distribution, self.fresnel, self.specular_color, self.roughness, self.alpha_x,
+                self.alpha_y, self.ior, texture, self.texture_target, tuple(sorted(self.factors_on)),
+                tuple(sorted(self.factors_off)))
+
+
+@dataclass
+class Shader:
+    """What a shader socket contributes: closures, emitted radiance and holdout weight, as Cycles sums them."""
+    closures: list = field(default_factory=list)
+    emission: tuple = BLACK
+    holdout: float = 0.0
+    summary: str = ""          # how describe() names it: "principled", "glass, IOR 1.50"...
+
+    def scaled(self, w):
+        return Shader([replace(c, color=_scaled(c.color, w)) for c in self.closures],
+                      _scaled(self.emission, w), self.holdout * w, self.summary)
 
 
 @dataclass
 class MaterialSpec:
     """One material as the core's add_material() takes it, plus the notes gathered while converting it."""
     name: str
-    kind: str = "diffuse"          # "diffuse" | "mirror" | "glass" | "glossy"
-    color: tuple = DEFAULT_COLOR
-    ior: float = 1.45
-    roughness: float = DEFAULT_ROUGHNESS   # glossy only: Blender's roughness, in [0, 1]
+    closures: list = field(default_factory=list)
+    factors: list = field(default_factory=list)      # (kind, value) keys, in index order
     emission: tuple = BLACK
     notes: list = field(default_factory=list)
-    # True when the shader reflects no light at all (an Emission shader, an unconnected shader socket):
-    # mixing it with a real surface then only scales that surface.
-    no_surface: bool = False
-    # An Image Texture node driving the colour (textures.TextureRef), looked up at the hit's UV by the core.
-    texture: object = None
     holdout: bool = False          # Holdout shader or holdout object: cut out of the image
+    summary: str = "diffuse"
 
-    def core_arguments(self):
-        """Keyword arguments for core Scene.add_material() (the texture index is added by the caller)."""
-        arguments = dict(name=self.name, kind=self.kind, color=tuple(self.color), ior=float(self.ior),
-                         emission=tuple(self.emission), roughness=float(self.roughness))
+    kind = "closures"
+
+    @property
+    def textures(self):
+        """The TextureRefs the closures use, once each."""
+        found = {}
+        for c in self.closures:
+            if c.texture is not None:
+                found.setdefault(c.texture.key, c.texture)
+        return list(found.values())
+
+    def closure_dicts(self, texture_index=None):
+        """The closures as the binding takes them; `texture_index(TextureRef)` gives a core texture index."""
+        index = {key: j for j, key in enumerate(self.factors)}
+        result = []
+        for c in self.closures:
+            d = dict(kind=c.kind, color=tuple(c.color))
+            if c.kind in ("reflection", "refraction"):
+                d.update(distribution=c.distribution, alpha_x=float(c.alpha_x), alpha_y=float(c.alpha_y),
+                         ior=float(c.ior))
+            if c.kind == "reflection":
+                d["fresnel"] = c.fresnel
+                if c.fresnel in ("principled", "schlick"):
+                    d["specular_color"] = tuple(c.specular_color)
+            if c.kind in ("diffuse", "principled_diffuse", "velvet"):
+                d["roughness"] = float(c.roughness)
+            if c.texture is not None:
+                texture = -1 if texture_index is None else int(texture_index(c.texture))
+                if texture >= 0:
+                    d["texture"] = texture
+                    d["texture_target"] = c.texture_target
+                elif c.texture_target == "color":    # unreadable image: its fallback grey, as before
+                    d["color"] = tuple(w * g for w, g in zip(c.color, DEFAULT_COLOR))
+                else:
+                    d["specular_color"] = DEFAULT_COLOR
+            if c.factors_on:
+                d["factors_on"] = sorted(index[k] for k in c.factors_on)
+            if c.factors_off:
+                d["factors_off"] = sorted(index[k] for k in c.factors_off)
+            result.append(d)
+        return result
+
+    def core_arguments(self, texture_index=None):
+        """Keyword arguments for core Scene.add_material(); `texture_index` maps a TextureRef to the core's
+        texture index (without it, textured closures get -1: no texture)."""
+        arguments = dict(name=self.name, kind="closures", closures=self.closure_dicts(texture_index),
+                         factors=[dict(kind=k, value=float(v)) for k, v in self.factors],
+                         emission=tuple(self.emission))
         if self.holdout:
             arguments["holdout"] = True
         return arguments
 
+    @property
+    def no_surface(self):
+        return not self.closures
+
     def describe(self):
-        """Short human description, e.g. for the material panel: 'glass, IOR 1.50'."""
-        text = self.kind
-        if self.kind == "glass":
-            text += f", IOR {self.ior:.2f}"
-        if self.kind == "glossy":
-            text += f", roughness {self.roughness:.2f}"
+        """Short human description, e.g. for the material panel: 'principled: diffuse + specular'."""
+        if self.holdout:
+            return "holdout"
+        labels = list(dict.fromkeys(c.label or c.kind for c in self.closures))
+        text = self.summary
+        if labels and labels != [self.summary]:
+            text += ": " + " + ".join(labels)
+        if not self.closures:
+            text = "black" if self.summary in ("", "diffuse") else self.summary
         if any(c > 0.0 for c in self.emission):
             text += ", emitting"
-        if self.texture is not None:
-            text += f", image '{self.texture.image.name}'"
-        if self.holdout:
-            text = "holdout"
+        for reference in self.textures:
+            text += f", image '{reference.image.name}'"
         return text
 
 
 def default_material():
-    return MaterialSpec(name=DEFAULT_MATERIAL_NAME)
+    return MaterialSpec(name=DEFAULT_MATERIAL_NAME, closures=[Closure("diffuse", DEFAULT_COLOR, label="diffuse")])
 
 
 def holdout_material():
     """What objects marked as holdout render with, whatever their own materials."""
-    return MaterialSpec(name="Photon Splat holdout", color=BLACK, holdout=True)
+    return MaterialSpec(name="Photon Splat holdout", holdout=True, summary="holdout")
 
 
 def convert_material(material):
@@ -106,136 +207,377 @@ def convert_material(material):
     if material is None:
         return default_material()
     name = material.name_full
+    notes = []
 
     if not compat.uses_nodes(material):
         # Without nodes Cycles shades the material as a diffuse surface of its viewport colour.
-        spec = MaterialSpec(name=name, color=_color(material.diffuse_color))
-        return _finish(spec)
+        color = _clamped_color(_color(material.diffuse_color), notes)
+        shader = Shader([Closure("diffuse", color, label="diffuse")], summary="diffuse")
+        return _finish(name, shader, notes)
 
     output = material.node_tree.get_output_node('CYCLES')
     if output is None:
-        spec = MaterialSpec(name=name)
-        spec.notes.append("no Material Output node, rendered as default grey diffuse")
-        return _finish(spec)
+        notes.append("no Material Output node, rendered as default grey diffuse")
+        shader = Shader([Closure("diffuse", DEFAULT_COLOR, label="diffuse")], summary="diffuse")
+        return _finish(name, shader, notes)
 
-    surface = output.inputs["Surface"]
-    if not surface.is_linked:
-        # Cycles renders an unconnected Surface as black.
-        spec = MaterialSpec(name=name, color=BLACK)
-        return _finish(spec)
-
-    spec = _convert_shader(source_node(surface), name)
-    spec.name = name
-    return _finish(spec)
+    try:
+        shader = _convert_socket(output.inputs["Surface"], (), notes)
+    except RecursionError:
+        notes.append("node tree too deeply nested: rendered as default grey diffuse")
+        shader = Shader([Closure("diffuse", DEFAULT_COLOR, label="diffuse")], summary="diffuse")
+    return _finish(name, shader, notes)
 
 
-def _finish(spec):
-    """Clamp colours into the range the core accepts (albedo and tints in [0, 1], emission >= 0)."""
-    clamped = tuple(min(max(c, 0.0), 1.0) for c in spec.color)
-    if clamped != tuple(spec.color):
-        spec.notes.append("colour outside [0, 1] clamped")
-    spec.color = clamped
-    spec.emission = tuple(max(c, 0.0) for c in spec.emission)
-    roughness = _clamp01(spec.roughness) if math.isfinite(spec.roughness) else DEFAULT_ROUGHNESS
-    if spec.kind == "glossy" and roughness != spec.roughness:
-        spec.notes.append(f"roughness {spec.roughness} outside [0, 1] replaced by {roughness:.2f}")
-    spec.roughness = roughness
-    return spec
+# --- the finished material ------------------------------------------------------------------------------------
+
+def _finish(name, shader, notes):
+    """The closures checked against what the core accepts: finite, in range, merged, within its limits."""
+    closures = []
+    for c in shader.closures:
+        c = _sanitised(c, notes)
+        if max(c.color) > WEIGHT_CUTOFF:
+            closures.append(c)
+    # Equal closures add up (a Mix of two diffuse shaders is one diffuse closure).
+    merged = {}
+    for c in closures:
+        key = c.merge_key()
+        if key in merged:
+            kept = merged[key]
+            merged[key] = replace(kept, color=tuple(a + b for a, b in zip(kept.color, c.color)),
+                                  label=kept.label if kept.label == c.label else kept.label)
+        else:
+            merged[key] = c
+    closures = list(merged.values())
+    closures = _within_limits(closures, notes)
+
+    # Factors: the ones used, at most MAX_FACTORS; the rest evaluated at normal incidence.
+    factors = []
+    for c in closures:
+        for key in (*c.factors_on, *c.factors_off):
+            if key not in factors:
+                factors.append(key)
+    if len(factors) > MAX_FACTORS:
+        dropped = set(factors[MAX_FACTORS:])
+        notes.append(f"more than {MAX_FACTORS} view-dependent mix factors: {len(dropped)} evaluated at normal "
+                     "incidence")
+        closures = [_freeze_factors(c, dropped) for c in closures]
+        factors = factors[:MAX_FACTORS]
+
+    emission = tuple(max(e, 0.0) if math.isfinite(e) else 0.0 for e in shader.emission)
+    holdout = False
+    if shader.holdout > WEIGHT_CUTOFF:
+        holdout = shader.holdout >= 0.5
+        if shader.holdout < 1.0 - 1e-6:
+            notes.append(f"partial holdout (weight {shader.holdout:.2f}) rendered as "
+                         + ("a full holdout" if holdout else "no holdout"))
+    if holdout:
+        closures = []
+    if not closures:
+        # Nothing reflects: a black surface (Cycles renders an unconnected Surface black).
+        closures = [Closure("diffuse", BLACK, label="black")]
+    return MaterialSpec(name=name, closures=closures, factors=factors, emission=emission, notes=notes,
+                        holdout=holdout, summary=shader.summary or "black")
+
+
+def _sanitised(c, notes):
+    def finite(value, default):
+        return float(value) if math.isfinite(value) else default
+    color = tuple(max(finite(v, 0.0), 0.0) for v in c.color)
+    specular = tuple(_clamp01(finite(v, 0.0)) for v in c.specular_color)
+    return replace(c, color=color, specular_color=specular, roughness=_clamp01(finite(c.roughness, 0.0)),
+                   alpha_x=_clamp01(finite(c.alpha_x, 0.0)), alpha_y=_clamp01(finite(c.alpha_y, 0.0)),
+                   ior=max(finite(c.ior, 1.45), 1e-5))
+
+
+def _directional(c):
+    return not c.is_delta() and not c.is_lambert()
+
+
+def _within_limits(closures, notes):
+    """At most MAX_CLOSURES closures and MAX_DIRECTIONAL directional ones: the lightest go, with a note."""
+    directional = sorted((c for c in closures if _directional(c)), key=Closure.weight, reverse=True)
+    if len(directional) > MAX_DIRECTIONAL:
+        dropped = directional[MAX_DIRECTIONAL:]
+        notes.append(f"{len(dropped)} lightest of {len(directional)} directional closures dropped (the core "
+                     f"takes {MAX_DIRECTIONAL})")
+        closures = [c for c in closures if not any(c is d for d in dropped)]
+    if len(closures) > MAX_CLOSURES:
+        ordered = sorted(closures, key=Closure.weight, reverse=True)
+        notes.append(f"{len(closures) - MAX_CLOSURES} lightest of {len(closures)} closures dropped (the core "
+                     f"takes {MAX_CLOSURES})")
+        keep = ordered[:MAX_CLOSURES]
+        closures = [c for c in closures if any(c is k for k in keep)]
+    return closures
+
+
+def _freeze_factors(c, dropped):
+    w = 1.0
+    for key in c.factors_on:
+        if key in dropped:
+            w *= _factor_at_normal_incidence(key)
+    for key in c.factors_off:
+        if key in dropped:
+            w *= 1.0 - _factor_at_normal_incidence(key)
+    return replace(c, color=_scaled(c.color, w), factors_on=tuple(k for k in c.factors_on if k not in dropped),
+                   factors_off=tuple(k for k in c.factors_off if k not in dropped))
 
 
 # --- shader nodes ---------------------------------------------------------------------------------------------
 
-def _convert_shader(node, name):
-    """Convert the shader node `node` (may be None: an unconnected shader socket)."""
-    if node is None:
-        # An unconnected shader socket adds nothing: no surface and no light.
-        return MaterialSpec(name=name, color=BLACK, no_surface=True)
+def _convert_socket(socket, stack, notes):
+    """The Shader a shader input socket receives (nothing when unconnected)."""
+    out, _, stack = follow(socket, stack)
+    if out is None:
+        return Shader()
+    node = out.node
     converter = _SHADERS.get(node.bl_idname)
     if converter is not None:
-        return converter(node, name)
-    return _unsupported_shader(node, name)
+        return converter(node, stack, notes)
+    return _unsupported_shader(node, stack, notes)
 
 
-def _principled(node, name):
-    """Principled BSDF, v1 (Blender 3.x) or v2 (4.0 and later): compat.principled_input names its inputs."""
-    notes = []
+def _principled(node, stack, notes):
+    if compat.principled_input("specular") is None:
+        return _principled_v2(node, stack, notes)
+    return _principled_v1(node, stack, notes)
+
+
+def _principled_v1(node, stack, notes):
+    """Principled BSDF v1 (Blender 3.x), as Cycles 3.4's svm_closure.h lowers CLOSURE_BSDF_PRINCIPLED_ID."""
+    inputs = _Inputs(node, stack, notes)
+    base, texture = inputs.color_or_texture("Base Color")
+    metallic = _clamp01(inputs.number("Metallic"))
+    subsurface = _clamp01(inputs.number("Subsurface"))
+    specular = max(inputs.number("Specular", 0.5), 0.0)
+    roughness = _clamp01(inputs.number("Roughness", 0.5))
+    specular_tint = _clamp01(inputs.number("Specular Tint"))
+    anisotropic = _clamp01(inputs.number("Anisotropic"))
+    sheen = max(inputs.number("Sheen"), 0.0)
+    sheen_tint = _clamp01(inputs.number("Sheen Tint", 0.5))
+    clearcoat = max(inputs.number("Clearcoat"), 0.0)
+    clearcoat_roughness = _clamp01(inputs.number("Clearcoat Roughness", 0.03))
+    eta = max(inputs.number("IOR", 1.45), 1e-5)
+    transmission = _clamp01(inputs.number("Transmission"))
+    transmission_roughness = _clamp01(inputs.number("Transmission Roughness"))
+    rotation = inputs.number("Anisotropic Rotation")
+    distribution = getattr(node, "distribution", "GGX")
+    _principled_common_notes(node, inputs, notes)
+
+    diffuse_weight = (1.0 - metallic) * (1.0 - transmission)
+    final_transmission = transmission * (1.0 - metallic)
+    specular_weight = 1.0 - final_transmission
+    closures = []
+
+    # Diffuse: Burley's, of Base Color blended towards Subsurface Color (Cycles' subsurface albedo).
+    color = base
+    if subsurface > WEIGHT_CUTOFF:
+        color = _mix(base, inputs.color("Subsurface Color"), subsurface)
+        notes.append("subsurface rendered as diffuse")
+        if texture is not None:
+            notes.append(f"image '{texture.image.name}' rendered without its blend towards Subsurface Color")
+    if diffuse_weight > WEIGHT_CUTOFF:
+        closures.append(_textured(Closure("principled_diffuse", _scaled(color, diffuse_weight),
+                                          roughness=roughness, label="diffuse"), texture, diffuse_weight))
+
+    # Sheen: white blended towards the base colour's hue by Sheen Tint.
+    if diffuse_weight > WEIGHT_CUTOFF and sheen > WEIGHT_CUTOFF:
+        tint = _hue(base, _LUMINANCE)
+        sheen_color = _mix(WHITE, tint, sheen_tint)
+        closures.append(Closure("sheen", _scaled(sheen_color, sheen * diffuse_weight), label="sheen"))
+        if texture is not None and sheen_tint > 0.0:
+            notes.append("sheen tinted by the image's fallback colour, not the image")
+
+    # Specular reflection: cspec0 mixes the tinted 0.08 x Specular with Base Color by Metallic.
+    alpha_x, alpha_y = _principled_alphas(roughness, anisotropic)
+    if specular_weight > WEIGHT_CUTOFF and (specular > WEIGHT_CUTOFF or metallic > WEIGHT_CUTOFF):
+        tint = _hue(base, (0.3, 0.6, 0.1))
+        tinted = _mix(WHITE, tint, specular_tint)
+        cspec0 = tuple(specular * 0.08 * t * (1.0 - metallic) + b * metallic for t, b in zip(tinted, base))
+        ior = 2.0 / (1.0 - math.sqrt(min(0.08 * specular, 0.999999))) - 1.0
+        dist = "ggx" if distribution == "GGX" or roughness <= 0.075 else "multi_ggx"
+        c = _microfacet("reflection", (specular_weight,) * 3, roughness, alpha_x, alpha_y, dist,
+                        fresnel="principled", specular_color=cspec0, ior=ior, label="specular")
+        if texture is not None and metallic >= 1.0:
+            c = replace(c, texture=texture, texture_target="specular_color")
+        elif texture is not None and metallic > 0.0:
+            notes.append(f"image '{texture.image.name}' not applied to the partly metallic specular colour")
+        closures.append(c)
+        if alpha_x != alpha_y:
+            _note_rotation(notes, rotation, node.inputs["Tangent"].is_linked)
+
+    # Transmission: Fresnel-weighted reflection and (1 - Fresnel)-weighted refraction of Base Color.
+    if final_transmission > WEIGHT_CUTOFF:
+        cspec0 = tuple(b * specular_tint + 1.0 - specular_tint for b in base)
+        fresnel = ("fresnel", eta)
+        if roughness <= ROUGHNESS_SHARP or distribution == "GGX":
+            refraction_roughness = (1.0 - (1.0 - roughness) * (1.0 - transmission_roughness)
+                                    if distribution == "GGX" else roughness)
+            dist = "ggx"
+        else:
+            refraction_roughness = roughness
+            dist = "ggx"
+            notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
+        closures.append(replace(
+            _microfacet("reflection", (final_transmission,) * 3, roughness, roughness ** 2, roughness ** 2, dist,
+                        fresnel="principled", specular_color=cspec0, ior=eta, label="glass reflection"),
+            factors_on=(fresnel,)))
+        refraction = _microfacet("refraction", _scaled(base, final_transmission), refraction_roughness,
+                                 refraction_roughness ** 2, refraction_roughness ** 2, dist, ior=eta,
+                                 label="refraction")
+        closures.append(_textured(replace(refraction, factors_off=(fresnel,)), texture, final_transmission))
+
+    # Clearcoat: GTR1, dielectric Fresnel of index 1.5, weighted 0.25 x Clearcoat in Cycles' eval.
+    if clearcoat > WEIGHT_CUTOFF:
+        a = clearcoat_roughness ** 2
+        closures.append(Closure("reflection", (0.25 * clearcoat,) * 3, distribution="gtr1", fresnel="dielectric",
+                                alpha_x=a, alpha_y=a, ior=1.5, label="clearcoat"))
+        if node.inputs["Clearcoat Normal"].is_linked:
+            notes.append("clearcoat normal map ignored")
+
+    emission = _scaled(inputs.color("Emission"), inputs.number("Emission Strength", 1.0))
+    return _with_alpha(Shader(closures, emission, summary="principled"), inputs.number("Alpha", 1.0), notes)
+
+
+def _principled_v2(node, stack, notes):
+    """Principled BSDF v2 (Blender 4.x): the same closure kinds, its layering approximated."""
     role = compat.principled_input
-    base, texture = color_or_texture(node, role("base_color"), notes)
-    metallic = _clamp01(float_input(node, role("metallic"), notes))
-    transmission = _clamp01(float_input(node, role("transmission"), notes))
-    roughness = float_input(node, role("roughness"), notes)
-    ior = float_input(node, role("ior"), notes)
-    emission = _scaled(color_input(node, role("emission_color"), notes),
-                       float_input(node, role("emission_strength"), notes))
-
-    # Cycles' weights (3.4 and 4.x alike): metal = metallic, glass = transmission * (1 - metallic),
-    # diffuse = (1 - metallic)(1 - transmission). We keep the dominant lobe; metal wins ties like in Cycles.
-    if metallic >= 0.5:
-        spec = _metal(name, base, roughness)
-        if metallic < 1.0:
-            notes.append(f"Metallic {metallic:.2f} rendered as a pure metal")
-        if spec.kind == "glossy":
-            _note_distribution(notes, getattr(node, "distribution", "GGX"))
-        if role("specular_ior_level") is not None and _is_tinted(color_input(node, role("specular_tint"), [])):
-            # v2's metal is an F82-tint Fresnel; with a white tint it is Schlick's with F0 = Base Color, ours.
-            notes.append("Specular Tint of the metal ignored (F82 edge tint rendered white)")
-    elif transmission >= 0.5:
-        spec = MaterialSpec(name=name, kind="glass", color=base, ior=ior)
-        if transmission < 1.0 or metallic > 0.0:
-            notes.append(f"Transmission {transmission:.2f} rendered as pure glass")
-        _note_rough(notes, roughness)
-    else:
-        subsurface = _clamp01(float_input(node, role("subsurface"), notes))
-        color = base
-        if subsurface > 0.0:
-            if role("subsurface_color") is not None:
-                # v1: Cycles' subsurface albedo blends towards Subsurface Color; diffuse with that colour is
-                # close. v2 scatters Base Color itself.
-                color = _mix(base, color_input(node, role("subsurface_color"), notes), subsurface)
-            notes.append("subsurface scattering rendered as diffuse")
-        spec = MaterialSpec(name=name, kind="diffuse", color=color)
-        if metallic > 0.0 or transmission > 0.0:
-            notes.append(f"Metallic {metallic:.2f} / Transmission {transmission:.2f} ignored (rendered diffuse)")
-
-    if float_input(node, role("alpha"), notes) < 1.0:
-        notes.append("Alpha ignored (rendered opaque)")
-    if float_input(node, role("coat"), notes) > 0.0:
-        notes.append(f"{role('coat')} ignored (no coat layer)")
-    if float_input(node, role("sheen"), notes) > 0.0:
-        notes.append(f"{role('sheen')} ignored (no sheen layer)")
-    if _optional_float(node, role("diffuse_roughness"), notes) > 0.0:
-        notes.append("Diffuse Roughness ignored (rendered Lambertian)")
-    if _optional_float(node, role("thin_film"), notes) > 0.0:
+    inputs = _Inputs(node, stack, notes)
+    base, texture = inputs.color_or_texture(role("base_color"))
+    metallic = _clamp01(inputs.number(role("metallic")))
+    roughness = _clamp01(inputs.number(role("roughness"), 0.5))
+    eta = max(inputs.number(role("ior"), 1.5), 1e-5)
+    transmission = _clamp01(inputs.number(role("transmission")))
+    subsurface = _clamp01(inputs.number(role("subsurface")))
+    level = max(inputs.number(role("specular_ior_level"), 0.5), 0.0)
+    specular_tint = _clamp_color(inputs.color(role("specular_tint")))
+    anisotropic = _clamp01(inputs.number(role("anisotropic")))
+    rotation = inputs.number("Anisotropic Rotation")
+    coat = _clamp01(inputs.number(role("coat")))
+    sheen = max(inputs.number(role("sheen")), 0.0)
+    diffuse_roughness = _clamp01(inputs.optional_number(role("diffuse_roughness")))
+    distribution = getattr(node, "distribution", "GGX")
+    dist = "ggx" if distribution == "GGX" else "multi_ggx"
+    _principled_common_notes(node, inputs, notes)
+    if inputs.optional_number(role("thin_film")) > 0.0:
         notes.append("thin film ignored")
-    if node.inputs[role("normal")].is_linked:
+
+    closures = []
+    alpha_x, alpha_y = _principled_alphas(roughness, anisotropic)
+    # Coat on top of everything: a dielectric GGX reflection; what lies below loses what it reflects.
+    below = 1.0
+    if coat > WEIGHT_CUTOFF:
+        coat_ior = max(inputs.number("Coat IOR", 1.5), 1.0)
+        coat_roughness = _clamp01(inputs.number(role("coat_roughness"), 0.03))
+        closures.append(_microfacet("reflection", (coat,) * 3, coat_roughness, coat_roughness ** 2,
+                                    coat_roughness ** 2, "ggx", fresnel="dielectric", ior=coat_ior, label="coat"))
+        below = 1.0 - coat * _f0(coat_ior)
+        tint = _clamp_color(inputs.color(role("coat_tint")))
+        if _is_tinted(tint):
+            notes.append("Coat Tint applied at normal incidence only")
+        below_tint = _mix(WHITE, tint, coat)
+        notes.append("coat layering approximated (layers below dimmed by the coat's normal reflectance)")
+    else:
+        below_tint = WHITE
+
+    def under(weight_rgb):
+        return tuple(w * below * t for w, t in zip(weight_rgb, below_tint))
+
+    # Metal: Schlick's Fresnel from Base Color (F82 with a white edge tint).
+    if metallic > WEIGHT_CUTOFF:
+        c = _microfacet("reflection", under((metallic,) * 3), roughness, alpha_x, alpha_y, dist,
+                        fresnel="schlick", specular_color=_clamp_color(base), label="metal")
+        if texture is not None:
+            c = replace(c, texture=texture, texture_target="specular_color")
+        closures.append(c)
+        if _is_tinted(specular_tint):
+            notes.append("Specular Tint of the metal ignored (F82 edge tint rendered white)")
+
+    # The dielectric specular: F0 of the IOR scaled by 2 x Specular IOR Level, tinted by Specular Tint.
+    f0 = min(_f0(eta) * 2.0 * level, 0.999)
+    specular_ior = (1.0 + math.sqrt(f0)) / (1.0 - math.sqrt(f0))
+    dielectric = 1.0 - metallic
+    glass = dielectric * transmission
+    opaque = dielectric * (1.0 - transmission)
+    if opaque > WEIGHT_CUTOFF and f0 > 0.0:
+        closures.append(_microfacet("reflection", under((opaque,) * 3), roughness, alpha_x, alpha_y, dist,
+                                    fresnel="principled", specular_color=_scaled(specular_tint, f0),
+                                    ior=specular_ior, label="specular"))
+    if glass > WEIGHT_CUTOFF:
+        fresnel = ("fresnel", eta)
+        glass_dist = "ggx"
+        if dist != "ggx" and _is_rough(roughness):
+            notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
+        closures.append(replace(
+            _microfacet("reflection", under((glass,) * 3), roughness, roughness ** 2, roughness ** 2, glass_dist,
+                        fresnel="schlick", specular_color=specular_tint, label="glass reflection"),
+            factors_on=(fresnel,)))
+        refraction = _microfacet("refraction", under(_scaled(base, glass)), roughness, roughness ** 2,
+                                 roughness ** 2, glass_dist, ior=eta, label="refraction")
+        closures.append(_textured(replace(refraction, factors_off=(fresnel,)), texture, glass * below))
+
+    # Sheen over the diffuse base: velvet of Sheen Roughness.
+    if opaque > WEIGHT_CUTOFF and sheen > WEIGHT_CUTOFF:
+        sheen_tint = _clamp_color(inputs.color(role("sheen_tint")))
+        sheen_roughness = _clamp01(inputs.number("Sheen Roughness", 0.5))
+        closures.append(Closure("velvet", under(_scaled(sheen_tint, sheen * opaque)), roughness=sheen_roughness,
+                                label="sheen"))
+        notes.append("microfibre sheen rendered as velvet")
+
+    # Diffuse base under the dielectric specular: dimmed by its normal reflectance.
+    if opaque > WEIGHT_CUTOFF:
+        if subsurface > WEIGHT_CUTOFF:
+            notes.append("subsurface rendered as diffuse")
+        weight = opaque * below * (1.0 - f0 * max(specular_tint))
+        c = Closure("diffuse", under(_scaled(base, opaque * (1.0 - f0 * max(specular_tint)))),
+                    roughness=diffuse_roughness, label="diffuse")
+        closures.append(_textured(c, texture, weight))
+        if f0 > 0.0:
+            notes.append("energy-conserving layering approximated (diffuse dimmed by the specular's normal "
+                         "reflectance)")
+    if alpha_x != alpha_y and (metallic > WEIGHT_CUTOFF or opaque > WEIGHT_CUTOFF):
+        _note_rotation(notes, rotation, node.inputs["Tangent"].is_linked)
+
+    emission = _scaled(inputs.color(role("emission_color")), inputs.number(role("emission_strength"), 0.0))
+    return _with_alpha(Shader(closures, emission, summary="principled"), inputs.number(role("alpha"), 1.0), notes)
+
+
+def _principled_common_notes(node, inputs, notes):
+    if node.inputs["Normal"].is_linked:
         notes.append("normal/bump map ignored")
-    spec.emission = emission
-    spec.texture = texture if spec.color == base else None
-    if texture is not None and spec.texture is None:
-        notes.append(f"image '{texture.image.name}' ignored (its colour is blended with Subsurface Color)")
-    spec.notes = notes
-    return spec
 
 
-def _optional_float(node, socket_name, notes):
-    """A number input that only some versions have (socket_name None, or missing from this node): 0 there."""
-    if socket_name is None or socket_name not in node.inputs:
-        return 0.0
-    return float_input(node, socket_name, notes)
+def _principled_alphas(roughness, anisotropic):
+    """Cycles' Principled anisotropy: aspect = sqrt(1 - 0.9 anisotropic), alphas r^2 / aspect and r^2 x aspect."""
+    aspect = math.sqrt(max(1.0 - anisotropic * 0.9, 1e-6))
+    r2 = roughness * roughness
+    return min(r2 / aspect, 1.0), r2 * aspect
 
 
-def _is_tinted(rgb):
-    return any(abs(c - 1.0) > 1e-6 for c in rgb)
+def _with_alpha(shader, alpha, notes):
+    """Alpha < 1: a transparent closure of weight 1 - alpha over the shader scaled by alpha (Cycles' mix)."""
+    alpha = _clamp01(alpha)
+    if alpha >= 1.0:
+        return shader
+    result = shader.scaled(alpha)
+    result.closures.append(Closure("transparent", (1.0 - alpha,) * 3, label="transparent"))
+    return result
 
 
-def _diffuse(node, name):
-    notes = []
-    color, texture = color_or_texture(node, "Color", notes)
-    spec = MaterialSpec(name=name, kind="diffuse", color=color, texture=texture)
-    if float_input(node, "Roughness", notes) > 0.0:
-        notes.append("Oren-Nayar roughness ignored (rendered Lambertian)")
-    spec.notes = notes
-    return spec
+def _textured(closure, texture, weight):
+    """`closure` with `texture` multiplying its colour: the colour is then the scalar weight."""
+    if texture is None:
+        return closure
+    return replace(closure, texture=texture, texture_target="color", color=(weight,) * 3)
+
+
+def _microfacet(kind, color, roughness, alpha_x, alpha_y, distribution, fresnel="none", specular_color=BLACK,
+                ior=1.45, label=""):
+    """A reflection or refraction closure; sharp when the Blender roughness is at most ROUGHNESS_SHARP."""
+    if distribution == "sharp" or not _is_rough(roughness):
+        distribution, alpha_x, alpha_y = "sharp", 0.0, 0.0
+    return Closure(kind, tuple(color), distribution=distribution, fresnel=fresnel,
+                   specular_color=tuple(specular_color), alpha_x=alpha_x, alpha_y=alpha_y, ior=ior, label=label)
 
 
 def _is_rough(roughness):
@@ -243,154 +585,283 @@ def _is_rough(roughness):
     return bool(np.float32(roughness) > np.float32(ROUGHNESS_SHARP))
 
 
-def _metal(name, color, roughness):
-    """A smooth metal is a mirror, a rough one glossy (GGX, alpha = roughness^2 in the core)."""
-    if _is_rough(roughness):
-        return MaterialSpec(name=name, kind="glossy", color=color, roughness=roughness)
-    return MaterialSpec(name=name, kind="mirror", color=color)
+# Blender's distribution names -> the core's; Ashikhmin-Shirley has no counterpart (GGX, noted).
+_DISTRIBUTIONS = {"SHARP": "sharp", "GGX": "ggx", "BECKMANN": "beckmann", "MULTI_GGX": "multi_ggx",
+                  "ASHIKHMIN_SHIRLEY": "ggx"}
 
 
-def _glossy(node, name):
-    notes = []
-    distribution = getattr(node, "distribution", "GGX")
-    color, texture = color_or_texture(node, "Color", notes)
-    roughness = float_input(node, "Roughness", notes)
-    if distribution == "SHARP":
-        # Cycles renders the Sharp distribution as a perfect mirror whatever the roughness.
-        spec = MaterialSpec(name=name, kind="mirror", color=color)
-    else:
-        spec = _metal(name, color, roughness)
-    if spec.kind == "glossy":
-        _note_distribution(notes, distribution)
-    # Blender 3.4's Anisotropic BSDF and 4.x's Glossy BSDF (one node since 4.0) have an Anisotropy input.
-    if "Anisotropy" in node.inputs and (node.inputs["Anisotropy"].is_linked
-                                        or float_input(node, "Anisotropy", notes) != 0.0):
-        notes.append("anisotropy ignored")
-    return _finish_node(spec, node, texture, notes)
+def _distribution(node, notes):
+    name = getattr(node, "distribution", "GGX")
+    if name == "ASHIKHMIN_SHIRLEY":
+        notes.append("Ashikhmin-Shirley distribution rendered as GGX")
+    return _DISTRIBUTIONS.get(name, "ggx")
 
 
-def _metallic(node, name):
-    """Metallic BSDF (Blender 4.3 and later): a metal whose Fresnel is F82-tint (Base Color at normal
-    incidence, Edge Tint near grazing) or a physical conductor (complex IOR n + ik per channel). The core's
-    metal is Schlick's Fresnel from the normal-incidence colour: exact for F82 with a white Edge Tint."""
-    notes = []
-    roughness = float_input(node, "Roughness", notes)
+def _anisotropic_alphas(roughness, anisotropy):
+    """Cycles' Glossy/Anisotropic BSDF: alpha = r^2 stretched by the anisotropy in (-0.99, 0.99)."""
+    a = roughness * roughness
+    anisotropy = min(max(anisotropy, -0.99), 0.99)
+    if anisotropy < 0.0:
+        return a / (1.0 + anisotropy), a * (1.0 + anisotropy)
+    return a * (1.0 - anisotropy), a / (1.0 - anisotropy)
+
+
+def _note_rotation(notes, rotation, tangent_linked):
+    if rotation != 0.0:
+        notes.append("anisotropic rotation approximated (the core's tangent runs around the object's Z axis)")
+    if tangent_linked:
+        notes.append("Tangent input ignored (the core's tangent runs around the object's Z axis)")
+
+
+def _glossy(node, stack, notes):
+    """Glossy BSDF (3.4), Anisotropic BSDF (3.4) and 4.x's Glossy (one node): reflection without Fresnel."""
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    roughness = _clamp01(inputs.number("Roughness", 0.5))
+    distribution = _distribution(node, notes)
+    alpha_x = alpha_y = roughness * roughness
+    if "Anisotropy" in node.inputs:
+        alpha_x, alpha_y = _anisotropic_alphas(roughness, inputs.number("Anisotropy"))
+        if alpha_x != alpha_y:
+            _note_rotation(notes, inputs.number("Rotation"), node.inputs["Tangent"].is_linked)
+    c = _microfacet("reflection", color, roughness, min(alpha_x, 1.0), min(alpha_y, 1.0), distribution,
+                    label="glossy")
+    summary = "glossy" if c.distribution != "sharp" else "mirror"
+    return Shader([_textured_color(c, texture, color)], summary=summary)
+
+
+def _textured_color(closure, texture, color):
+    """A closure whose colour is an image: colour 1 times the image."""
+    if texture is None:
+        return closure
+    return replace(closure, texture=texture, texture_target="color", color=WHITE)
+
+
+def _metallic(node, stack, notes):
+    """Metallic BSDF (Blender 4.3 and later): Schlick's Fresnel from Base Color (F82 mode) or from a physical
+    conductor's normal reflectance ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel."""
+    inputs = _Inputs(node, stack, notes)
+    roughness = _clamp01(inputs.number("Roughness", 0.5))
+    texture = None
     if getattr(node, "fresnel_type", "F82") == "PHYSICAL_CONDUCTOR":
-        n = _color(_input_value(node, "IOR", notes))
-        k = _color(_input_value(node, "Extinction", notes))
+        n = inputs.color("IOR")
+        k = inputs.color("Extinction")
         color = tuple(((a - 1.0) ** 2 + b * b) / ((a + 1.0) ** 2 + b * b) for a, b in zip(n, k))
-        texture = None
         notes.append("conductor Fresnel rendered as Schlick's from its normal-incidence reflectance")
     else:
-        color, texture = color_or_texture(node, "Base Color", notes)
-        if _is_tinted(color_input(node, "Edge Tint", [])):
+        color, texture = inputs.color_or_texture("Base Color")
+        if _is_tinted(inputs.color("Edge Tint")):
             notes.append("Edge Tint ignored (F82 edge rendered white)")
-    spec = _metal(name, color, roughness)
-    if spec.kind == "glossy":
-        _note_distribution(notes, getattr(node, "distribution", "GGX"))
-    if node.inputs["Anisotropy"].is_linked or float_input(node, "Anisotropy", notes) != 0.0:
-        notes.append("anisotropy ignored")
-    return _finish_node(spec, node, texture, notes)
+    alpha_x, alpha_y = _anisotropic_alphas(roughness, inputs.number("Anisotropy"))
+    if alpha_x != alpha_y:
+        _note_rotation(notes, inputs.number("Rotation"), node.inputs["Tangent"].is_linked)
+    c = _microfacet("reflection", WHITE, roughness, min(alpha_x, 1.0), min(alpha_y, 1.0),
+                    _distribution(node, notes), fresnel="schlick", specular_color=_clamp_color(color),
+                    label="metal")
+    if texture is not None:
+        c = replace(c, texture=texture, texture_target="specular_color")
+    return Shader([c], summary="metal")
 
 
-def _glass(node, name):
-    notes = []
-    color, texture = color_or_texture(node, "Color", notes)
-    spec = MaterialSpec(name=name, kind="glass", color=color, ior=float_input(node, "IOR", notes))
-    _note_rough(notes, float_input(node, "Roughness", notes))
-    return _finish_node(spec, node, texture, notes)
+def _glass(node, stack, notes):
+    """Glass BSDF: reflection and refraction split by a Fresnel factor of its IOR (Cycles' Glass)."""
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    roughness = _clamp01(inputs.number("Roughness"))
+    eta = max(inputs.number("IOR", 1.45), 1e-5)
+    distribution = _distribution(node, notes)
+    if distribution == "multi_ggx":
+        if _is_rough(roughness):
+            notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
+        distribution = "ggx"
+    a = roughness * roughness
+    fresnel = ("fresnel", eta)
+    reflection = _microfacet("reflection", color, roughness, a, a, distribution, ior=eta, label="reflection")
+    refraction = _microfacet("refraction", color, roughness, a, a, distribution, ior=eta, label="refraction")
+    closures = [replace(_textured_color(reflection, texture, color), factors_on=(fresnel,)),
+                replace(_textured_color(refraction, texture, color), factors_off=(fresnel,))]
+    summary = f"glass, IOR {eta:.2f}" + (", rough" if reflection.distribution != "sharp" else "")
+    return Shader(closures, summary=summary)
 
 
-# Nodes converted as a kin of theirs, and what that leaves out.
-_KIN_NOTES = {
-    "ShaderNodeBsdfRefraction": "Refraction BSDF rendered as glass (with Fresnel reflection)",
-}
+def _refraction(node, stack, notes):
+    """Refraction BSDF: refraction only, no Fresnel, no reflection."""
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    roughness = _clamp01(inputs.number("Roughness"))
+    eta = max(inputs.number("IOR", 1.45), 1e-5)
+    a = roughness * roughness
+    c = _microfacet("refraction", color, roughness, a, a, _distribution(node, notes), ior=eta, label="refraction")
+    return Shader([_textured_color(c, texture, color)], summary=f"refraction, IOR {eta:.2f}")
 
 
-def _finish_node(spec, node, texture, notes):
-    """`spec` with the texture of its Color input and its notes, the note of a kin node last."""
-    spec.texture = texture
-    if node.bl_idname in _KIN_NOTES:
-        notes.append(_KIN_NOTES[node.bl_idname])
-    spec.notes = notes
-    return spec
+def _diffuse(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    roughness = _clamp01(inputs.number("Roughness"))
+    c = Closure("diffuse", color, roughness=roughness, label="diffuse")
+    return Shader([_textured_color(c, texture, color)], summary="diffuse")
 
 
-def _transparent(node, name):
-    # A dielectric of index 1 neither bends nor reflects light: exactly a tinted transparent surface.
-    notes = []
-    return MaterialSpec(name=name, kind="glass", color=color_input(node, "Color", notes), ior=1.0, notes=notes)
+def _translucent(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    return Shader([_textured_color(Closure("translucent", color, label="translucent"), texture, color)],
+                  summary="translucent")
 
 
-def _emission(node, name):
-    notes = []
-    radiance = _scaled(color_input(node, "Color", notes), float_input(node, "Strength", notes))
-    return MaterialSpec(name=name, kind="diffuse", color=BLACK, emission=radiance, notes=notes,
-                        no_surface=True)
+def _transparent(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    return Shader([Closure("transparent", inputs.color("Color"), label="transparent")], summary="transparent")
 
 
-def _holdout(node, name):
-    return MaterialSpec(name=name, color=BLACK, holdout=True)
+def _velvet(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    sigma = _clamp01(inputs.number("Sigma" if "Sigma" in node.inputs else "Roughness", 1.0))
+    if getattr(node, "distribution", "ASHIKHMIN") == "MICROFIBER":
+        notes.append("microfibre sheen rendered as velvet")
+    return Shader([_textured_color(Closure("velvet", color, roughness=sigma, label="velvet"), texture, color)],
+                  summary="velvet")
 
 
-def _mix_shader(node, name):
-    notes = []
-    fac = _clamp01(float_input(node, "Fac", notes))
+def _subsurface(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    color, texture = inputs.color_or_texture("Color")
+    notes.append("subsurface rendered as diffuse")
+    return Shader([_textured_color(Closure("diffuse", color, label="diffuse"), texture, color)],
+                  summary="subsurface")
+
+
+def _emission(node, stack, notes):
+    inputs = _Inputs(node, stack, notes)
+    radiance = _scaled(inputs.color("Color"), inputs.number("Strength", 1.0))
+    return Shader([], radiance, summary="emission")
+
+
+def _holdout(node, stack, notes):
+    return Shader([], holdout=1.0, summary="holdout")
+
+
+def _mix_shader(node, stack, notes):
     # Inputs 1 and 2 are the two shader sockets (both are called "Shader").
-    first = _convert_shader(source_node(node.inputs[1]), name)
-    second = _convert_shader(source_node(node.inputs[2]), name)
-    spec = _combine(first, 1.0 - fac, second, fac, "Mix Shader", notes)
-    spec.notes = first.notes + second.notes + notes
-    return spec
-
-
-def _add_shader(node, name):
-    notes = []
-    first = _convert_shader(source_node(node.inputs[0]), name)
-    second = _convert_shader(source_node(node.inputs[1]), name)
-    spec = _combine(first, 1.0, second, 1.0, "Add Shader", notes)
-    spec.notes = first.notes + second.notes + notes
-    return spec
-
-
-def _combine(first, w1, second, w2, what, notes):
-    """Weighted sum of two converted shaders, as Cycles sums closures.
-
-    Emission adds exactly, and so do two diffuse surfaces (their albedos add). When one side has no surface
-    (an Emission shader or an unconnected socket) the other one's colour is scaled by its weight: exact for
-    diffuse, close for mirror, glossy and glass (whose Fresnel reflection is not scaled). Two different surface types
-    cannot be blended by the core: the heavier one is kept and a note says so."""
-    emission = tuple(w1 * a + w2 * b for a, b in zip(first.emission, second.emission))
-    spec = MaterialSpec(name=first.name, emission=emission)
-    if first.no_surface and second.no_surface:
-        spec.color, spec.no_surface = BLACK, True
-    elif first.no_surface or second.no_surface:
-        kept, weight = (second, w2) if first.no_surface else (first, w1)
-        spec.kind, spec.color, spec.ior = kept.kind, _scaled(kept.color, weight), kept.ior
-        spec.roughness, spec.texture, spec.holdout = kept.roughness, kept.texture, kept.holdout
-        if kept.texture is not None and weight != 1.0:
-            notes.append(f"{what}: image '{kept.texture.image.name}' not scaled by the factor {weight:.2f}")
-    elif (first.kind == "diffuse" and second.kind == "diffuse" and first.texture is None
-          and second.texture is None and not first.holdout and not second.holdout):
-        spec.color = tuple(w1 * a + w2 * b for a, b in zip(first.color, second.color))
+    first = _convert_socket(node.inputs[1], stack, notes)
+    second = _convert_socket(node.inputs[2], stack, notes)
+    factor = _view_factor(node.inputs["Fac"], stack, notes)
+    if factor is None:
+        fac = _clamp01(_Inputs(node, stack, notes).number("Fac", 0.5))
+        combined = _add(first.scaled(1.0 - fac), second.scaled(fac))
     else:
-        kept, weight = (first, w1) if w1 >= w2 else (second, w2)
-        spec.kind, spec.color, spec.ior, spec.roughness = kept.kind, kept.color, kept.ior, kept.roughness
-        spec.texture, spec.holdout = kept.texture, kept.holdout
-        label = lambda s: "holdout" if s.holdout else s.kind + (" (image)" if s.texture is not None else "")
-        notes.append(f"{what} of {label(first)} and {label(second)} rendered as {label(kept)} alone")
-    return spec
+        at_normal = _factor_at_normal_incidence(factor)
+        a = _with_factor(first, factor, off=True, at_normal=1.0 - at_normal, notes=notes)
+        b = _with_factor(second, factor, off=False, at_normal=at_normal, notes=notes)
+        combined = _add(a, b)
+    combined.summary = _mix_summary("mix", first, second)
+    return combined
 
 
-def _unsupported_shader(node, name):
-    """Translucent, Subsurface, Velvet, Toon, Hair, groups...: a diffuse surface of its colour, if it has one."""
-    notes = []
+def _add_shader(node, stack, notes):
+    first = _convert_socket(node.inputs[0], stack, notes)
+    second = _convert_socket(node.inputs[1], stack, notes)
+    combined = _add(first, second)
+    combined.summary = _mix_summary("add", first, second)
+    return combined
+
+
+def _mix_summary(what, first, second):
+    parts = [s.summary for s in (first, second) if s.summary]
+    if len(parts) == 1:
+        return parts[0]
+    if len(parts) == 2 and parts[0] == parts[1]:
+        return parts[0]
+    return f"{what} of " + " and ".join(parts) if parts else ""
+
+
+def _add(a, b):
+    return Shader(a.closures + b.closures, tuple(x + y for x, y in zip(a.emission, b.emission)),
+                  a.holdout + b.holdout)
+
+
+def _with_factor(shader, factor, off, at_normal, notes):
+    """`shader` weighted by a view-dependent factor (or 1 - it): its closures carry the factor; its emission and
+    holdout take the factor's value at normal incidence."""
+    closures = []
+    for c in shader.closures:
+        present = c.factors_off if off else c.factors_on
+        if factor in present:
+            # A closure's factor bits OR together: the core cannot square a factor.
+            notes.append("a view-dependent mix factor applied twice to the same shader is applied once")
+            closures.append(c)
+        elif off:
+            closures.append(replace(c, factors_off=c.factors_off + (factor,)))
+        else:
+            closures.append(replace(c, factors_on=c.factors_on + (factor,)))
+    if any(e > 0.0 for e in shader.emission) or shader.holdout > 0.0:
+        notes.append("view-dependent mix factor above an emission or holdout evaluated at normal incidence")
+    return Shader(closures, _scaled(shader.emission, at_normal), shader.holdout * at_normal, shader.summary)
+
+
+def _view_factor(socket, stack, notes):
+    """The (kind, value) key of a Fresnel or Layer Weight node driving a Mix Shader's Fac, or None."""
+    out, _, inner = follow(socket, stack)
+    if out is None:
+        return None
+    node = out.node
+    if node.bl_idname == "ShaderNodeFresnel":
+        kind, value_name = "fresnel", "IOR"
+    elif node.bl_idname == "ShaderNodeLayerWeight":
+        kind, value_name = ("layer_fresnel" if out.name == "Fresnel" else "layer_facing"), "Blend"
+    else:
+        return None
+    value_out, value_socket, _ = follow(node.inputs[value_name], inner)
+    if value_out is not None and value_out.node.bl_idname != "ShaderNodeValue":
+        return None                        # a computed IOR or Blend: the Fac's constant value, noted
+    value = value_out.default_value if value_out is not None else value_socket.default_value
+    value = float(value)
+    if not math.isfinite(value):
+        return None
+    if node.inputs["Normal"].is_linked:
+        notes.append(f"{node.bl_label} node's Normal input ignored (the shading normal used)")
+    if kind == "fresnel":
+        value = max(value, 1e-5)
+    else:
+        value = _clamp01(value)
+    return (kind, value)
+
+
+def _fresnel_dielectric_cos(cosi, eta):
+    """Cycles' fresnel_dielectric_cos."""
+    c = abs(cosi)
+    g = eta * eta - 1.0 + c * c
+    if g <= 0.0:
+        return 1.0
+    g = math.sqrt(g)
+    a = (g - c) / (g + c)
+    b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
+    return 0.5 * a * a * (1.0 + b * b)
+
+
+def _factor_at_normal_incidence(key):
+    kind, value = key
+    if kind == "fresnel":
+        return _fresnel_dielectric_cos(1.0, max(value, 1e-5))
+    if kind == "layer_fresnel":
+        return _fresnel_dielectric_cos(1.0, 1.0 / max(1.0 - value, 1e-5))
+    return 0.0                             # layer_facing: 1 - cos^k is 0 facing the viewer
+
+
+def _f0(ior):
+    return ((ior - 1.0) / (ior + 1.0)) ** 2
+
+
+def _unsupported_shader(node, stack, notes):
+    """Toon, Hair, volumes...: a diffuse surface of its colour, if it has one."""
     if "Color" in node.inputs:
-        color = color_input(node, "Color", notes)
+        color = _Inputs(node, stack, notes).color("Color")
     else:
         color = DEFAULT_COLOR
     notes.append(f"unsupported shader '{node.bl_label}' rendered as diffuse")
-    return MaterialSpec(name=name, kind="diffuse", color=color, notes=notes)
+    return Shader([Closure("diffuse", color, label="diffuse")], summary="diffuse")
 
 
 _SHADERS = {
@@ -400,8 +871,12 @@ _SHADERS = {
     "ShaderNodeBsdfAnisotropic": _glossy,
     "ShaderNodeBsdfMetallic": _metallic,      # Blender 4.3 and later
     "ShaderNodeBsdfGlass": _glass,
-    "ShaderNodeBsdfRefraction": _glass,
+    "ShaderNodeBsdfRefraction": _refraction,
+    "ShaderNodeBsdfTranslucent": _translucent,
     "ShaderNodeBsdfTransparent": _transparent,
+    "ShaderNodeBsdfVelvet": _velvet,
+    "ShaderNodeBsdfSheen": _velvet,           # 4.0 renamed Velvet to Sheen (Ashikhmin: Sigma as Roughness)
+    "ShaderNodeSubsurfaceScattering": _subsurface,
     "ShaderNodeEmission": _emission,
     "ShaderNodeHoldout": _holdout,
     "ShaderNodeMixShader": _mix_shader,
@@ -411,53 +886,121 @@ _SHADERS = {
 
 # --- reading socket values ------------------------------------------------------------------------------------
 
-def source_node(socket):
-    """The node feeding `socket`, looking through reroutes; None when unconnected or the link is muted."""
-    while socket.is_linked:
-        link = socket.links[0]
-        if getattr(link, "is_muted", False):
-            return None
-        node = link.from_node
-        if node.bl_idname != "NodeReroute":
-            return node
-        socket = node.inputs[0]
+def _group_output(tree):
+    outputs = [n for n in tree.nodes if n.bl_idname == "NodeGroupOutput"]
+    for n in outputs:
+        if getattr(n, "is_active_output", False):
+            return n
+    return outputs[0] if outputs else None
+
+
+def _by_identifier(sockets, identifier):
+    for s in sockets:
+        if s.identifier == identifier:
+            return s
     return None
 
 
+def follow(socket, stack=()):
+    """What feeds the input `socket`: (output socket or None, the input socket whose own value applies when there
+    is none, the group nodes we are inside). Looks through reroutes, into node groups (to their Group Output) and
+    back out of them (a Group Input socket leads to the Group node's input). Muted links count as unconnected."""
+    for _ in range(1000):
+        if not socket.is_linked:
+            return None, socket, stack
+        link = socket.links[0]
+        if getattr(link, "is_muted", False) or not getattr(link, "is_valid", True):
+            return None, socket, stack
+        out, node = link.from_socket, link.from_node
+        if node.bl_idname == "NodeReroute":
+            socket = node.inputs[0]
+        elif node.bl_idname == "ShaderNodeGroup":
+            group_output = _group_output(node.node_tree) if node.node_tree is not None else None
+            inner = _by_identifier(group_output.inputs, out.identifier) if group_output is not None else None
+            if inner is None:
+                return None, socket, stack
+            socket, stack = inner, stack + (node,)
+        elif node.bl_idname == "NodeGroupInput" and stack:
+            outer = _by_identifier(stack[-1].inputs, out.identifier)
+            if outer is None:
+                return None, socket, stack
+            socket, stack = outer, stack[:-1]
+        else:
+            return out, socket, stack
+    return None, socket, stack
+
+
+def source_node(socket):
+    """The node feeding `socket`, looking through reroutes and groups; None when unconnected."""
+    out, _, _ = follow(socket)
+    return None if out is None else out.node
+
+
+class _Inputs:
+    """A node's inputs read as constants, inside the group nesting `stack`; notes what is not."""
+
+    def __init__(self, node, stack, notes):
+        self.node, self.stack, self.notes = node, stack, notes
+
+    def value(self, name):
+        socket = self.node.inputs[name]
+        out, own, _ = follow(socket, self.stack)
+        if out is None:
+            return own.default_value
+        if out.node.bl_idname in ("ShaderNodeRGB", "ShaderNodeValue"):
+            return out.default_value
+        self.notes.append(f"'{name}' driven by a {out.node.bl_label} node: its unconnected value used")
+        return socket.default_value
+
+    def number(self, name, default=0.0):
+        if name is None or name not in self.node.inputs:
+            return default
+        value = self.value(name)
+        if isinstance(value, (int, float)):
+            value = float(value)
+        else:
+            value = sum(_color(value)) / 3.0   # a colour plugged into a number: Cycles takes its average
+        if not math.isfinite(value):
+            self.notes.append(f"'{name}' is not a number: {default} used")
+            return default
+        return value
+
+    def optional_number(self, name):
+        return self.number(name, 0.0)
+
+    def color(self, name, default=DEFAULT_COLOR):
+        if name is None or name not in self.node.inputs:
+            return default
+        rgb = _color(self.value(name))
+        if not all(math.isfinite(c) for c in rgb):
+            self.notes.append(f"'{name}' is not a number: default used")
+            return default
+        return rgb
+
+    def color_or_texture(self, name):
+        """(colour, TextureRef or None): an Image Texture node plugged in becomes a texture the core looks up at
+        the hit's UV; anything else is read as color() does. Colours are clamped to [0, 1]."""
+        out, _, _ = follow(self.node.inputs[name], self.stack)
+        if out is not None and out.node.bl_idname == "ShaderNodeTexImage":
+            reference, color = textures.texture_reference(out.node, self.notes)
+            return color, reference
+        return _clamped_color(self.color(name), self.notes), None
+
+
 def _input_value(node, socket_name, notes):
-    """Value of an input socket. A constant node (RGB, Value) plugged in is read; for anything else
-    (textures, math...) the socket's own unconnected value is used and a note says so."""
-    socket = node.inputs[socket_name]
-    if socket.is_linked:
-        source = source_node(socket)
-        if source is not None and source.bl_idname in ("ShaderNodeRGB", "ShaderNodeValue"):
-            return source.outputs[0].default_value
-        if source is not None:
-            notes.append(f"'{socket_name}' driven by a {source.bl_label} node: its unconnected value used")
-    return socket.default_value
+    return _Inputs(node, (), notes).value(socket_name)
 
 
 def color_input(node, socket_name, notes):
-    return _color(_input_value(node, socket_name, notes))
-
-
-def color_or_texture(node, socket_name, notes):
-    """(colour, TextureRef or None) of a colour input: an Image Texture node plugged in (directly or through
-    reroutes) becomes a texture the core looks up at the hit's UV; anything else is read as color_input does."""
-    socket = node.inputs[socket_name]
-    source = source_node(socket) if socket.is_linked else None
-    if source is not None and source.bl_idname == "ShaderNodeTexImage":
-        reference, color = textures.texture_reference(source, notes)
-        return color, reference
-    return color_input(node, socket_name, notes), None
+    return _Inputs(node, (), notes).color(socket_name)
 
 
 def float_input(node, socket_name, notes):
-    value = _input_value(node, socket_name, notes)
-    if isinstance(value, (int, float)):
-        return float(value)
-    rgb = _color(value)                    # a colour plugged into a number: Cycles takes its average
-    return sum(rgb) / 3.0
+    return _Inputs(node, (), notes).number(socket_name)
+
+
+def color_or_texture(node, socket_name, notes):
+    return _Inputs(node, (), notes).color_or_texture(socket_name)
 
 
 def _color(value):
@@ -465,6 +1008,27 @@ def _color(value):
     if isinstance(value, (int, float)):
         return (float(value),) * 3
     return tuple(float(c) for c in tuple(value)[:3])
+
+
+def _clamped_color(rgb, notes):
+    clamped = _clamp_color(rgb)
+    if clamped != tuple(rgb):
+        notes.append("colour outside [0, 1] clamped")
+    return clamped
+
+
+def _clamp_color(rgb):
+    return tuple(_clamp01(c) for c in rgb)
+
+
+def _hue(rgb, weights):
+    """Colour over its luminance (hue and saturation alone), white for black: Cycles' m_ctint."""
+    lum = sum(w * c for w, c in zip(weights, rgb))
+    return tuple(c / lum for c in rgb) if lum > 0.0 else WHITE
+
+
+def _is_tinted(rgb):
+    return any(abs(c - 1.0) > 1e-6 for c in rgb)
 
 
 def _scaled(rgb, factor):
@@ -477,20 +1041,3 @@ def _mix(a, b, t):
 
 def _clamp01(value):
     return min(max(value, 0.0), 1.0)
-
-
-def _note_rough(notes, roughness):
-    """For glass only: the core has no rough dielectric."""
-    if _is_rough(roughness):
-        notes.append(f"Roughness {roughness:.2f} rendered perfectly smooth (rough glass is not supported)")
-
-
-# Distributions the core renders exactly (Principled and Glossy BSDF's default); others become GGX with a note.
-_DISTRIBUTION_NAMES = {"BECKMANN": "Beckmann", "ASHIKHMIN_SHIRLEY": "Ashikhmin-Shirley",
-                       "MULTI_GGX": "Multiscatter GGX"}
-
-
-def _note_distribution(notes, distribution):
-    if distribution != "GGX":
-        label = _DISTRIBUTION_NAMES.get(distribution, str(distribution))
-        notes.append(f"{label} distribution rendered as GGX (single scattering)")
