@@ -99,12 +99,12 @@ def test_closed_emitting_box_has_radiance_le_over_one_minus_albedo():
     albedo, emission = 0.6, 0.5
     camera = ps.look_at_camera(eye=(0.1, -0.5, 0.2), target=(0.3, 1.0, -0.1), width=16, height=16, fov_y_degrees=90,
                                near=0.01)
-    image, _ = ps.render_reference(closed_box(albedo, emission), camera, samples=128, max_bounces=30)
+    image, _ = ps.render_reference(closed_box(albedo, emission), camera, samples=192, max_bounces=30)
     expected = emission / (1.0 - albedo)
     print(f"\nfurnace: mean {image[..., :3].mean():.4f}, expected {expected:.4f}, "
           f"pixel range {image[..., 0].min():.3f}..{image[..., 0].max():.3f}")
     assert image[..., :3].mean() == pytest.approx(expected, rel=0.01)
-    assert np.abs(image[..., :3] / expected - 1.0).max() < 0.15     # per pixel: noise only (about 3.5 % rms)
+    assert np.abs(image[..., :3] / expected - 1.0).max() < 0.15     # per pixel: noise only (about 2.9 % rms)
 
 
 def mirror_scene(light, intensity, albedo, light_radius=0.0):
