@@ -179,7 +179,8 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         view_settings.max_specular_depth = settings.max_bounces;
         view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
-        reserve_split_samples(budget, settings, pixels, samples.samples.size());
+        reserve_split_samples(budget, settings, pixels, samples.samples.size(), samples.lobes.size(),
+                              !samples.transmitted_direct.empty());
 
         // 2. Direct light at the view samples.
         control.begin_stage("direct light", 0.15, 0.35);

@@ -56,8 +56,10 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
 // A frame whose camera paths split at glass (view_samples.h) has more view samples than pixels: reserves what the
 // samples beyond one a pixel add to every per-sample structure reserve_frame counted. Called once their number is
 // known, right after the view samples stage (so their own bytes are counted just after they were allocated;
-// they are at most one more sample a pixel).
-void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples);
+// they are at most one more sample a pixel for each part of a BSDF beyond the first), with the lobes of glossy
+// samples and the buffer of light through rough transmission.
+void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples,
+                           size_t lobes = 0, bool transmitted_direct = false);
 
 // Refuses (InvalidInput, as reserve does) a frame that would not fit, before anything is allocated; for a caller
 // that holds `extra_bytes_per_pixel` beside each pass's buffers (the progressive render's running sums).
