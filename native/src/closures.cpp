@@ -297,8 +297,16 @@ MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i) {
     const float e_i = table.albedo(mu_i, alpha);
     const float base = (1.0f - e_o) * (1.0f - e_i) / (kPi * (1.0f - e_avg));
     // Kulla & Conty's Fresnel factor: the energy kept through all the bounces with the average Fresnel F_avg.
-    const glm::vec3 f_avg = fresnel_average(lobe.fresnel, lobe.specular_color, lobe.eta);
-    const glm::vec3 fms = f_avg * f_avg * e_avg / (glm::vec3(1.0f) - f_avg * (1.0f - e_avg));
+    // Without a Fresnel (Glossy BSDF), Cycles' random walk tints every bounce after the first by the colour
+    // (specular_color here; the first bounce's is in the weight already): one power of F_avg fewer.
+    glm::vec3 fms;
+    if (lobe.fresnel == FresnelKind::none) {
+        const glm::vec3 tint = glm::clamp(lobe.specular_color, 0.0f, 1.0f);
+        fms = tint * e_avg / (glm::vec3(1.0f) - tint * (1.0f - e_avg));
+    } else {
+        const glm::vec3 f_avg = fresnel_average(lobe.fresnel, lobe.specular_color, lobe.eta);
+        fms = f_avg * f_avg * e_avg / (glm::vec3(1.0f) - f_avg * (1.0f - e_avg));
+    }
     out.f = lobe.weight * fms * base;
     return out;
 }

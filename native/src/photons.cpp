@@ -70,8 +70,8 @@ struct CausticWeighting {
 };
 
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
-// stored where the surface has reflection parts a view sample could hold (except at its first hit: direct
-// light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
+// stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
+// the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
 // that surviving photons keep about the power they arrived with. Only delta parts (mirrors, sharp refraction,
 // transparency) keep a path a caustic one: light → delta+ → stored.
 void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, int max_bounces, Rng& rng,
@@ -79,6 +79,9 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
+    // Until its first scatter other than transparency, what the photon reaches is direct light, which shadow rays
+    // (through transparent surfaces too) already count.
+    bool direct = true;
     float caustic_weight = 1.0f;
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
@@ -87,7 +90,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
         const Bsdf b = shade(scene, s, -ray.direction);
-        if (vertex > 0 && bsdf_has(b, LobeSet::reflection)) {
+        if (!direct && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far;
             out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
                                  caustic ? static_cast<uint32_t>(kCaustic) : 0u});
@@ -99,9 +102,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         if (step.kind == ScatterKind::lobes) {
             if (weighting.aimed) return;
             only_specular_so_far = false;
-        } else if (vertex == 0 && weighting.aim && !weighting.aimed) {
+        } else if (direct && step.kind != ScatterKind::transparent && weighting.aim && !weighting.aimed) {
             caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
         }
+        if (step.kind != ScatterKind::transparent) direct = false;
         // Russian roulette on the weight keeps every surviving photon's power near the emitted one.
         const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;

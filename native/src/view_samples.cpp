@@ -38,6 +38,7 @@ struct CameraPath {
     glm::vec3 throughput;
     int depth;
     uint32_t branch = 0;       // which of its pixel's branches (ViewSample flags)
+    bool camera_ray = true;    // still the camera's own ray (only transparency crossed): it does not see lights
     bool split_done = false;   // the pixel's one split (at the first surface with several parts) is behind
     // The ray left a rough transmission sampled with density `lobe_pdf` at `lobe_x`, whose next-event estimation
     // also reaches emitters: those met weigh by the power heuristic (else 1: nothing else could find them).
@@ -127,7 +128,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                                             hit, from_camera ? kCameraRays : kIndirectRays);
         // Lights with a size, seen in mirrors, through glass and rough transmission (Cycles' camera rays do not
         // see lights themselves).
-        if (!from_camera && p.sources != nullptr) {
+        if (!path.camera_ray && p.sources != nullptr) {
             for (size_t l = 0; l < p.sources->size(); ++l) {
                 const Light* light = p.sources->light(l);
                 if (light == nullptr || p.sources->is_delta(l)) continue;
@@ -197,8 +198,9 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         // Paths that go on from this vertex, the first of which continues this loop.
         CameraPath next[4];
         int next_count = 0;
+        // `same_ray`: transparency, which lets the ray go on as it was (its MIS state and camera-ness kept).
         const auto go_on = [&](const glm::vec3& direction, const glm::vec3& w, bool transmitted, bool lobe,
-                               float lobe_pdf) {
+                               float lobe_pdf, bool same_ray = false) {
             const glm::vec3 t = path.throughput * w;
             if (!(t.x > 0.0f || t.y > 0.0f || t.z > 0.0f) || !can_continue) return;
             const glm::vec3 side = transmitted ? -s.geometric_normal : s.geometric_normal;
@@ -206,10 +208,13 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             n.depth = path.depth + 1;
             n.ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), direction};
             n.throughput = t;
-            n.after_lobe = lobe;
-            n.lobe_x = s.position;
-            n.lobe_side = side;
-            n.lobe_pdf = lobe_pdf;
+            if (!same_ray) {
+                n.camera_ray = false;
+                n.after_lobe = lobe;
+                n.lobe_x = s.position;
+                n.lobe_side = side;
+                n.lobe_pdf = lobe_pdf;
+            }
             next[next_count++] = n;
         };
         if (take[0]) add_view_sample(p, path, s, b, path.throughput / probability[0]);
@@ -219,7 +224,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             glm::vec3 d;
             if (refraction_direction(b, d)) go_on(d, b.refraction / probability[3], true, false, 0.0f);
         }
-        if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, 0.0f);
+        if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, 0.0f, true);
         if (take[1]) {
             // Rough transmission: its own next-event estimation here, then a sampled direction on.
             const glm::vec3 t = path.throughput / probability[1];

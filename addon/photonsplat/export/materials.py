@@ -626,6 +626,9 @@ def _glossy(node, stack, notes):
             _note_rotation(notes, inputs.number("Rotation"), node.inputs["Tangent"].is_linked)
     c = _microfacet("reflection", color, roughness, min(alpha_x, 1.0), min(alpha_y, 1.0), distribution,
                     label="glossy")
+    if c.distribution == "multi_ggx":
+        # Cycles' random walk tints every bounce after the first by the colour again.
+        c = replace(c, specular_color=_clamp_color(color))
     summary = "glossy" if c.distribution != "sharp" else "mirror"
     return Shader([_textured_color(c, texture, color)], summary=summary)
 

@@ -72,7 +72,9 @@ struct Closure {
     FresnelKind fresnel = FresnelKind::none;        // reflection only
     TextureTarget texture_target = TextureTarget::color;
     glm::vec3 color{0.8f};           // the weight: colour × every constant Mix/Add factor above it; >= 0
-    glm::vec3 specular_color{0.0f};  // principled / schlick Fresnel's colour at normal incidence, in [0, 1]
+    glm::vec3 specular_color{0.0f};  // principled / schlick Fresnel's colour at normal incidence, in [0, 1]; for
+                                     // multi_ggx without Fresnel: the tint of each bounce after the first (Cycles'
+                                     // Glossy colour; 0: single scattering only)
     float roughness = 0.0f;          // diffuse (Oren–Nayar σ), principled_diffuse, velvet (σ): in [0, 1]
     float alpha_x = 0.0f, alpha_y = 0.0f;  // reflection / refraction: α along the tangent and the bitangent
                                            // (isotropic: equal; Blender roughness², as Cycles squares it)

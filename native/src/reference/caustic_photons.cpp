@@ -68,6 +68,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
             const EmissionSample emitted = sources.sample_emission(which[k], u1, u2, u3, u4, u5);
             glm::vec3 power = emitted.power / static_cast<float>(probability);
             Ray ray{emitted.origin, emitted.direction};
+            bool direct = true;
             for (int bounce = 0; bounce <= max_specular_bounces; ++bounce) {
                 Hit hit;
                 if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
@@ -75,12 +76,13 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
                 // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).
-                if (bounce > 0 && bsdf_has(b, LobeSet::reflection))
+                if (!direct && bsdf_has(b, LobeSet::reflection))
                     per_chunk[chunk].push_back(Photon{s.position, -ray.direction, s.geometric_normal, power, kCaustic});
                 if (bounce == max_specular_bounces) break;
                 const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                 const BsdfSample step = bsdf_sample(b, u0, u1, u2);
                 if (step.kind == ScatterKind::none || step.kind == ScatterKind::lobes) break;
+                if (step.kind != ScatterKind::transparent) direct = false;  // L T D is the path tracer's (shadows)
                 const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
                 power *= step.weight / keep;

@@ -109,12 +109,13 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
     const glm::vec3 origin = c.caustics ? c.caustics->origin() : glm::vec3(0.0f);
     glm::vec3 radiance(0.0f), throughput(1.0f);
     LastScatter last;
+    bool camera_ray = true;  // only transparency crossed so far: still the camera's ray, which sees no lights
     for (int depth = 0;; ++depth) {
         Hit hit;
         ++counters.rays;
         const bool found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit);
         // Scene lights are not in the BVH: test them against the ray. Camera rays do not see them (render()).
-        if (depth > 0) {
+        if (!camera_ray) {
             for (size_t l = 0; l < c.sources.size(); ++l) {
                 const Light* light = c.sources.light(l);
                 if (!light) continue;
@@ -154,10 +155,12 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         const glm::vec3 side = bs.transmitted ? -s.geometric_normal : s.geometric_normal;
         if (bs.kind == ScatterKind::lobes && !(glm::dot(bs.direction, side) > 0.0f)) break;
         ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), bs.direction};
+        // Transparency lets the ray go on as it was: its MIS state stays that of the last real scatter.
         if (bs.kind == ScatterKind::lobes)
             last = LastScatter{true, false, s.position, bs.pdf};
-        else
+        else if (bs.kind != ScatterKind::transparent)
             last.specular_since = true;
+        if (bs.kind != ScatterKind::transparent) camera_ray = false;
         const float keep = std::max({throughput.x, throughput.y, throughput.z});
         if (!(keep > 0.0f)) break;
         if (depth >= kRouletteFromDepth && keep < 1.0f) {
