@@ -24,8 +24,9 @@ namespace {
 constexpr int kMaxSpecularCrossings = 4;  // mirrors and glass a probe passes through before it gives up
 
 // What a probe finds of the surface photons land on: along the segment from `start` in direction `down` (length
-// `length`), the first non-specular surface, if it faces within the splat's tolerance of `normal`. Specular
-// surfaces are passed through: the photons they send on land behind them. Returns the cosine between that
+// `length`), the first non-specular surface, if it faces within the splat's tolerance of `normal`. Specular and
+// transmitting surfaces (glass, rough glass, transparency, translucency) are passed through: the photons they send
+// on land behind them. Returns the cosine between that
 // surface's normal and `normal` (0 when the probe finds no such surface) and the distance along the segment.
 struct ProbeHit {
     float cosine = 0.0f;
@@ -41,7 +42,7 @@ ProbeHit probe(const Scene& scene, const glm::vec3& start, const glm::vec3& down
         Hit hit;
         if (!tracer.intersect(ray, t_min, length, hit, kIndirectRays)) return {};
         const SurfacePoint s = surface_at(scene, ray, hit);
-        if (!s.material->is_specular()) {
+        if (!s.material->is_specular() && !s.material->transmits) {
             const float cosine = glm::dot(s.geometric_normal, normal);
             return cosine > cos_tolerance ? ProbeHit{cosine, hit.t} : ProbeHit{};
         }

@@ -40,12 +40,8 @@ struct CameraPath {
     uint32_t branch = 0;       // which of its pixel's branches (ViewSample flags)
     bool camera_ray = true;    // still the camera's own ray (only transparency crossed): it does not see lights
     bool split_done = false;   // the pixel's one split (at the first surface with several parts) is behind
-    // The ray left a rough transmission sampled with density `lobe_pdf` at `lobe_x`, whose next-event estimation
-    // also reaches emitters: those met weigh by the power heuristic (else 1: nothing else could find them).
+    // The ray left a rough transmission, whose own next-event estimation found the emitters this ray may meet.
     bool after_lobe = false;
-    glm::vec3 lobe_x{0.0f};
-    glm::vec3 lobe_side{0.0f};  // geometric normal on the side the ray left to
-    float lobe_pdf = 0.0f;
 };
 
 // What the first surface a pixel's camera ray hits tells its pixel (as Cycles' passes).
@@ -74,9 +70,10 @@ struct PixelPaths {
     uint64_t rays = 0;
 };
 
-float mis_weight(const CameraPath& path, float light_pdf) {
-    return path.after_lobe ? power_heuristic(path.lobe_pdf, light_pdf) : 1.0f;
-}
+// Emitters met by a ray that left a rough transmission were that vertex's next-event estimation's, whose own
+// BSDF-sampled probes and light samples cover them, weighted against each other (direct_light.h): 0 here. Met
+// after a delta bounce (or by a camera ray), nothing else finds them: 1.
+float emitter_weight(const CameraPath& path) { return path.after_lobe ? 0.0f : 1.0f; }
 
 // The view sample of b's reflection parts at surface s, reached by `path`.
 void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf& b,
@@ -128,13 +125,13 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                                             hit, from_camera ? kCameraRays : kIndirectRays);
         // Lights with a size, seen in mirrors, through glass and rough transmission (Cycles' camera rays do not
         // see lights themselves).
-        if (!path.camera_ray && p.sources != nullptr) {
+        if (!path.camera_ray && !path.after_lobe && p.sources != nullptr) {
             for (size_t l = 0; l < p.sources->size(); ++l) {
                 const Light* light = p.sources->light(l);
                 if (light == nullptr || p.sources->is_delta(l)) continue;
-                const LightHit h = intersect_light(*light, path.after_lobe ? path.lobe_x : ray.origin, ray.direction);
+                const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
-                p.emitted += path.throughput * h.radiance * mis_weight(path, h.pdf);
+                p.emitted += path.throughput * h.radiance * emitter_weight(path);
             }
         }
         if (!found) {
@@ -150,12 +147,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             p.first.depth = p.camera.view_depth(s.position);
             p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
-        if (s.material->emission != glm::vec3(0.0f)) {
-            float w = 1.0f;
-            if (path.after_lobe && p.sources != nullptr)
-                w = mis_weight(path, p.sources->emissive_pdf(hit.instance, hit.triangle, path.lobe_x, s.position));
-            p.emitted += path.throughput * s.material->emission * w;
-        }
+        if (s.material->emission != glm::vec3(0.0f)) p.emitted += path.throughput * s.material->emission * emitter_weight(path);
         const Bsdf b = shade(scene, s, -ray.direction);
 
         // The parts and their weights (luminance of what each scatters, roughly).
@@ -200,7 +192,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         int next_count = 0;
         // `same_ray`: transparency, which lets the ray go on as it was (its MIS state and camera-ness kept).
         const auto go_on = [&](const glm::vec3& direction, const glm::vec3& w, bool transmitted, bool lobe,
-                               float lobe_pdf, bool same_ray = false) {
+                               bool same_ray = false) {
             const glm::vec3 t = path.throughput * w;
             if (!(t.x > 0.0f || t.y > 0.0f || t.z > 0.0f) || !can_continue) return;
             const glm::vec3 side = transmitted ? -s.geometric_normal : s.geometric_normal;
@@ -211,9 +203,6 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (!same_ray) {
                 n.camera_ray = false;
                 n.after_lobe = lobe;
-                n.lobe_x = s.position;
-                n.lobe_side = side;
-                n.lobe_pdf = lobe_pdf;
             }
             next[next_count++] = n;
         };
@@ -222,9 +211,9 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         // Refraction first, mirror last: a pixel split at glass keeps its refracted path, the reflected one branches.
         if (take[3]) {
             glm::vec3 d;
-            if (refraction_direction(b, d)) go_on(d, b.refraction / probability[3], true, false, 0.0f);
+            if (refraction_direction(b, d)) go_on(d, b.refraction / probability[3], true, false);
         }
-        if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, 0.0f, true);
+        if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, true);
         if (take[1]) {
             // Rough transmission: its own next-event estimation here, then a sampled direction on.
             const glm::vec3 t = path.throughput / probability[1];
@@ -234,9 +223,9 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             const float u0 = p.rng.uniform(), u1 = p.rng.uniform(), u2 = p.rng.uniform();
             const BsdfSample bs = bsdf_sample_set(b, LobeSet::transmission, u0, u1, u2);
             if (bs.kind == ScatterKind::lobes)
-                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true, bs.pdf);
+                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true);
         }
-        if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false, 0.0f);
+        if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false);
         if (next_count == 0) return;
         // Every sample of a pixel needs its own branch number (its random numbers in later stages).
         if (sampled_here) next[0].branch = p.next_branch++;
