@@ -111,6 +111,18 @@ float ggx_g1(const glm::vec3& v, Alphas a) {
     return 2.0f / (1.0f + std::sqrt(1.0f + alpha2_tan2(v, a)));
 }
 
+// Smith's Λ of GGX (Cycles' mf_lambda for a direction above the surface): G1 = 1 / (1 + Λ).
+float ggx_lambda(const glm::vec3& v, Alphas a) {
+    return 0.5f * (std::sqrt(1.0f + alpha2_tan2(v, a)) - 1.0f);
+}
+
+// The height-correlated Smith masking-shadowing of GGX, G2 = 1 / (1 + Λ(wo) + Λ(wi)): Cycles' multiscatter GGX's
+// single scattering (G2 in mf_eval_glossy), where plain GGX uses the separable G1(wo) G1(wi).
+float ggx_g2_correlated(const glm::vec3& wo, const glm::vec3& wi, Alphas a) {
+    if (wo.z == 0.0f || wi.z == 0.0f) return 0.0f;
+    return 1.0f / (1.0f + ggx_lambda(wo, a) + ggx_lambda(wi, a));
+}
+
 float beckmann_d(const glm::vec3& h, Alphas a) {
     if (!(h.z > 0.0f)) return 0.0f;
     const float cos2 = h.z * h.z;
@@ -213,10 +225,16 @@ glm::vec3 fresnel_average(FresnelKind kind, const glm::vec3& specular_color, flo
 
 // ---- Multiple-scattering compensation of GGX (Kulla & Conty 2017) -----------------------------------------------
 //
-// E(μ, α) = ∫ f_ss(wi, wo) cos θ_i dwi for white single-scatter GGX, μ = cos θ_o: the energy one bounce keeps. The
-// light the microsurface scatters more than once, 1 − E(μ_o), leaves with the lobe
-//   f_ms(wi, wo) = (1 − E(μ_o)) (1 − E(μ_i)) / (π (1 − E_avg(α))),   E_avg = 2∫E(μ)μ dμ,
-// whose albedo is exactly 1 − E(μ_o): single + multiple scattering reflect all the light for F = 1.
+// E(μ, α) = ∫ f_ss(wi, wo) cos θ_i dwi for white single-scatter multi_ggx (GGX with the height-correlated G2, as
+// Cycles' multiscatter GGX scatters once), μ = cos θ_o: the energy one bounce keeps. The light the microsurface
+// scatters more than once, 1 − E(μ_o), leaves with the lobe
+//   f_ms(wi, wo) = (1 − E(μ_o)) (1 − E(μ_i)) / (π (1 − E_avg(α))) · T,   E_avg = 2∫E(μ)μ dμ,
+// whose albedo is exactly 1 − E(μ_o) for T = 1: single + multiple scattering reflect all the light for F = 1.
+// T is the colour those extra bounces keep (multi_scatter).
+
+// The escape-rate profile s(μ) = √μ of the coloured compensation (multi_scatter) and its slope in α.
+constexpr float kMultiTintSlope = 0.43f;
+float multi_tint_profile(float mu) { return std::sqrt(std::max(mu, 0.0f)); }
 
 class GgxAlbedoTable {
 public:
@@ -230,6 +248,7 @@ public:
             for (int i = 0; i < kMu; ++i) {
                 const float mu = std::max(i / float(kMu - 1), 1e-3f);
                 const glm::vec3 wo(std::sqrt(1.0f - mu * mu), 0.0f, mu);
+                const float lambda_o = ggx_lambda(wo, a);
                 double sum = 0.0;
                 for (int s1 = 0; s1 < kStrata; ++s1)
                     for (int s2 = 0; s2 < kStrata; ++s2) {
@@ -238,7 +257,8 @@ public:
                         const float c = glm::dot(wo, h);
                         if (!(c > 0.0f)) continue;
                         const glm::vec3 wi = 2.0f * c * h - wo;
-                        if (wi.z > 0.0f) sum += ggx_g1(wi, a);  // f cos / pdf under visible-normal sampling
+                        // f cos / pdf under visible-normal sampling: G2(wo, wi) / G1(wo)
+                        if (wi.z > 0.0f) sum += (1.0f + lambda_o) / (1.0f + lambda_o + ggx_lambda(wi, a));
                     }
                 e_[j][i] = std::min(1.0f, float(sum / (kStrata * kStrata)));
             }
@@ -251,6 +271,19 @@ public:
                 avg += 2.0 * h * (e0 * (m0 / 2.0 + h / 6.0) + e1 * (m0 / 2.0 + h / 3.0));
             }
             avg_[j] = float(avg);
+            // The mean of s(μ_i) over the compensation lobe's directions (weight (1 − E(μ_i)) μ_i), midpoint rule.
+            constexpr int kSteps = 256;
+            double num = 0.0, den = 0.0;
+            for (int k = 0; k < kSteps; ++k) {
+                const double m = (k + 0.5) / kSteps;
+                const double fm = m * (kMu - 1);
+                const int i = std::min(int(fm), kMu - 2);
+                const double e = e_[j][i] + (e_[j][i + 1] - e_[j][i]) * (fm - i);
+                const double w = (1.0 - e) * m;
+                num += w * multi_tint_profile(float(m));
+                den += w;
+            }
+            profile_mean_[j] = den > 0.0 ? float(num / den) : multi_tint_profile(0.5f);
         }
     }
 
@@ -262,15 +295,18 @@ public:
         const float e1 = e_[j + 1][i] + (e_[j + 1][i + 1] - e_[j + 1][i]) * tm;
         return e0 + (e1 - e0) * ta;
     }
-    float average(float alpha) const {
-        const float fa = std::clamp(alpha, 0.0f, 1.0f) * (kAlpha - 1);
-        const int j = std::min(int(fa), kAlpha - 2);
-        return avg_[j] + (avg_[j + 1] - avg_[j]) * (fa - j);
-    }
+    float average(float alpha) const { return lerp_alpha(avg_, alpha); }
+    float profile_mean(float alpha) const { return lerp_alpha(profile_mean_, alpha); }
 
 private:
+    static float lerp_alpha(const float (&v)[kAlpha], float alpha) {
+        const float fa = std::clamp(alpha, 0.0f, 1.0f) * (kAlpha - 1);
+        const int j = std::min(int(fa), kAlpha - 2);
+        return v[j] + (v[j + 1] - v[j]) * (fa - j);
+    }
     float e_[kAlpha][kMu];
     float avg_[kAlpha];
+    float profile_mean_[kAlpha];
 };
 
 const GgxAlbedoTable& ggx_albedo_table() {
@@ -296,14 +332,24 @@ MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i) {
     if (!(1.0f - e_avg > 1e-6f) || mu_i <= 0.0f) return out;
     const float e_i = table.albedo(mu_i, alpha);
     const float base = (1.0f - e_o) * (1.0f - e_i) / (kPi * (1.0f - e_avg));
-    // Kulla & Conty's Fresnel factor: the energy kept through all the bounces with the average Fresnel F_avg.
-    // Without a Fresnel (Glossy BSDF), Cycles' random walk tints every bounce after the first by the colour
-    // (specular_color here; the first bounce's is in the weight already): one power of F_avg fewer.
     glm::vec3 fms;
     if (lobe.fresnel == FresnelKind::none) {
+        // Glossy BSDF: Cycles' random walk (mf_sample) multiplies the throughput by the colour at every bounce
+        // after the first (specular_color here; the first bounce's is in the weight already), so light that
+        // leaves after k extra bounces keeps tint^k. With a constant chance q of leaving at each extra bounce that
+        // sums to T = tint q / (1 − tint (1 − q)); white (tint 1) keeps T = 1 whatever q. Kulla & Conty's
+        // q = E_avg(α) is far too low (the walk leaves sooner): fitted to Cycles 3.4's own furnace albedos
+        // (docs/closures.md), q = 1 − 0.43 α (s(μ_o) + s(μ_i) − s̄(α)), s(μ) = √μ, s̄ the mean of s over this
+        // lobe's directions: symmetric in wi and wo, and its albedo for wo keeps q(μ_o) = 1 − 0.43 α s(μ_o) on
+        // average (fresh light escapes sooner from grazing views; rough surfaces hold it longer).
+        const float q = std::clamp(
+            1.0f - kMultiTintSlope * alpha *
+                       (multi_tint_profile(mu_o) + multi_tint_profile(mu_i) - table.profile_mean(alpha)),
+            0.02f, 1.0f);
         const glm::vec3 tint = glm::clamp(lobe.specular_color, 0.0f, 1.0f);
-        fms = tint * e_avg / (glm::vec3(1.0f) - tint * (1.0f - e_avg));
+        fms = tint * q / (glm::vec3(1.0f) - tint * (1.0f - q));
     } else {
+        // Kulla & Conty's Fresnel factor: the energy kept through all the bounces with the average Fresnel F_avg.
         const glm::vec3 f_avg = fresnel_average(lobe.fresnel, lobe.specular_color, lobe.eta);
         fms = f_avg * f_avg * e_avg / (glm::vec3(1.0f) - f_avg * (1.0f - e_avg));
     }
@@ -345,9 +391,11 @@ LobeValue eval_reflection(const Lobe& lobe, Alphas a, const glm::vec3& wi, const
             pdf = g1o * d / (4.0f * wo.z);
             break;
     }
+    // multi_ggx scatters once with Cycles' height-correlated G2 = 1 / (1 + Λ(wo) + Λ(wi)) (mf_eval_glossy)
+    const float g = lobe.distribution == Distribution::multi_ggx ? ggx_g2_correlated(wo, wi, a) : g1o * g1i;
     LobeValue out;
     const glm::vec3 fresnel = fresnel_color(lobe.fresnel, lobe.specular_color, lobe.eta, glm::dot(wi, h));
-    out.f = lobe.weight * fresnel * (d * g1o * g1i / (4.0f * wi.z * wo.z));
+    out.f = lobe.weight * fresnel * (d * g / (4.0f * wi.z * wo.z));
     out.pdf = pdf;
     if (lobe.distribution == Distribution::multi_ggx) {
         const MultiScatter ms = multi_scatter(lobe, a, wo.z, wi.z);
