@@ -44,6 +44,27 @@ const std::vector<glm::vec3>& brute_on_random_scene(uint32_t seed, Kernel kernel
     return out;
 }
 
+// Half the samples hold reflection lobes beyond Lambert's: a GGX lobe and one more closure each, every kind in turn
+// (Beckmann, anisotropic GGX, multiscatter GGX, clearcoat, sheen, velvet, Oren–Nayar, principled diffuse, principled
+// Fresnel; test_support.h's add_random_lobes): the BRDF each photon meets is its own direction's in every method.
+TEST_P(ExactMethod, MatchesBruteWithEveryReflectionClosure) {
+    const SplatMethod method = GetParam();
+    SyntheticOptions o;
+    o.glossy_fraction = 0.5;
+    for (uint32_t seed = 4; seed <= 5; ++seed) {
+        const SyntheticSplat in = synthetic_splat(method, seed, 3000, 0.5f, o);
+        size_t with_lobes = 0;
+        for (const ViewSample& s : in.frame.samples.samples) with_lobes += (s.flags & kGlossy) ? 1 : 0;
+        ASSERT_GT(with_lobes, in.frame.samples.samples.size() / 3);
+        for (Kernel kernel : {Kernel::uniform, Kernel::epanechnikov})
+            for (float radius : {0.05f, 0.3f, 1.5f}) {
+                SCOPED_TRACE("seed " + std::to_string(seed) + " " + to_string(kernel) + " radius " + std::to_string(radius));
+                const Comparison c = compare_with_brute(method, in.frame.input(), in.map, splat_params(radius, in.map, kernel));
+                if (radius == 0.3f) EXPECT_GT(counter(c.brute, "contributing_pairs"), 1000.0);
+            }
+    }
+}
+
 TEST_P(ExactMethod, MatchesBruteOnRandomScenesAtEveryRadiusAndBothKernels) {
     const SplatMethod method = GetParam();
     size_t samples = 0, identical = 0;
