@@ -287,7 +287,8 @@ void build_cones(const ViewSamples& samples, ClusterHierarchy& h) {
             unit.clear();
             for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                 const ViewSample& s = samples.samples[h.sample_order[k]];
-                if (s.flags & kGlossy) flags &= uint8_t(~kNodeDiffuseOnly);
+                // Trivial accepts skip the per-sample test: only for samples it could not refuse by side either.
+                if (s.flags & (kGlossy | kInsideSample)) flags &= uint8_t(~kNodeDiffuseOnly);
                 const glm::dvec3 n(s.normal);
                 const double length = glm::length(n);
                 const bool unit_normal = std::isfinite(length) && std::fabs(length - 1.0) <= kUnitTolerance;

@@ -92,8 +92,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const Bsdf b = shade(scene, s, -ray.direction);
         if (!direct && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far;
+            const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
+                                   (inside_transmitter(s) ? static_cast<uint32_t>(kInsidePhoton) : 0u);
             out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
-                                 caustic ? static_cast<uint32_t>(kCaustic) : 0u});
+                                 flags});
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
         }
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();

@@ -72,6 +72,8 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
     return s;
 }
 
+bool inside_transmitter(const SurfacePoint& s) { return !s.entering && s.material->transmits; }
+
 glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& n, float rounding_scale) {
     constexpr float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
     glm::vec3 result;

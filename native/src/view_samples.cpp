@@ -97,6 +97,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
         ++sample.lobe_count;
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
+    if (inside_transmitter(s)) sample.flags |= kInsideSample;
     p.found.push_back(sample);
 }
 

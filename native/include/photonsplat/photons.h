@@ -14,6 +14,8 @@ struct Stats;
 
 enum PhotonFlags : uint32_t {
     kCaustic = 1u,  // path light → specular+ → this diffuse hit (L S+ D)
+    kInsidePhoton = 2u,  // stored on the back face of a transmitting surface (inside glass): splats only onto view
+                         // samples there too, never through the surface onto what lies close outside (splat.h)
 };
 
 struct Photon {

@@ -29,6 +29,12 @@ struct SurfacePoint {
 // become surfaces, for camera paths, shadow-ray origins and photon paths alike.
 SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
 
+// Whether the hit lies on the inside of a transmitting surface (its back face: inside rough glass, behind a
+// translucent pane), where photons and view samples are kept apart from those outside (kInsidePhoton,
+// kInsideSample): rough glass stores photons on its inner walls, and a kernel reaching through the wall would
+// splat them onto the floor just below it.
+bool inside_transmitter(const SurfacePoint& s);
+
 // A ray origin just off the surface on the side of `normal`, robust at any scale (the integer-ulp offset of
 // Wächter & Binder, Ray Tracing Gems ch. 6), so rays neither re-hit their surface nor tunnel through thin walls.
 // The offset is 256 ulps of each coordinate of p, or 8 ulps of `rounding_scale` where that is larger: a mesh

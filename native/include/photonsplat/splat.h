@@ -81,6 +81,8 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
     const glm::vec3 d = s.position - p;
     const float r = params.radius;
     if (!(glm::dot(d, d) < r * r)) return false;
+    // Inside a transmitting surface and outside it are different places, however close (view_samples.h).
+    if (((photon.flags & kInsidePhoton) != 0) != ((s.flags & kInsideSample) != 0)) return false;
     if (!(glm::dot(s.normal, photon.wi) > 0.0f)) return false;
     if (!(glm::dot(s.normal, photon.normal) > params.cos_normal_tolerance)) return false;
     if (params.plane_distance_factor > 0.0f &&

@@ -20,7 +20,9 @@ struct Stats;
 enum ViewSampleFlags : uint32_t {
     kViaSpecular = 1u,  // the camera path bounced off a mirror, through glass or a rough transmission before it
     kGlossy = 2u,       // the surface has lobes beyond Lambert's (shading.h): its BRDF depends on the directions
+    kInsideSample = 8u, // on the back face of a transmitting surface (inside glass): receives kInsidePhoton photons only
 };
+
 // Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
 // stayed; the first hit's other parts each start a branch), so that each sample draws its own random numbers.
 constexpr uint32_t kBranchShift = 8;

@@ -77,7 +77,9 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
                 // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).
                 if (!direct && bsdf_has(b, LobeSet::reflection))
-                    per_chunk[chunk].push_back(Photon{s.position, -ray.direction, s.geometric_normal, power, kCaustic});
+                    per_chunk[chunk].push_back(Photon{
+                        s.position, -ray.direction, s.geometric_normal, power,
+                        kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u)});
                 if (bounce == max_specular_bounces) break;
                 const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                 const BsdfSample step = bsdf_sample(b, u0, u1, u2);

@@ -55,7 +55,8 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
     v.lobe_count = 0;
     for (int k = 0; k < b.lobe_count; ++k)
         if (!is_transmission(b.lobes[k])) lobes[v.lobe_count++] = b.lobes[k];
-    v.flags = v.lobe_count > 0 ? kGlossy : 0u;
+    v.flags = (v.lobe_count > 0 ? kGlossy : 0u) |
+              (inside_transmitter(s) ? static_cast<uint32_t>(kInsideSample) : 0u);
     return v;
 }
 

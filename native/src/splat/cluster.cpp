@@ -413,6 +413,8 @@ private:
             return;
         }
         const PhotonCone pc = photon_cone(photon.wi, photon.normal, params_.cos_normal_tolerance);
+        // An inside photon (photons.h) reaches only inside samples, which accepted nodes never hold.
+        const bool inside = (photon.flags & kInsidePhoton) != 0;
         std::vector<uint32_t>& out = segment.leaves;
         uint64_t tests = 0, far = 0, facing_away = 0, misoriented_count = 0, accepts = 0;
         stack.clear();
@@ -442,7 +444,7 @@ private:
                     cones_pass = faces & within;
                 }
                 const float max_d2 = max_distance_sq(p, node.box_min, node.box_max);
-                bool accept = (max_d2 < accept_d2) & node.acceptable() & cones_pass;
+                bool accept = (max_d2 < accept_d2) & node.acceptable() & cones_pass & !inside;
                 if (kappa > 0.0f && accept)
                     accept = plane_test_passes(p, node.box_min, node.box_max, cone, max_d2, params_.radius, kappa);
                 if (accept) {
