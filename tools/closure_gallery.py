@@ -53,6 +53,28 @@ BOUNCES = 16
 SEEDS = 4           # Cycles renders per round, with different seeds: their spread measures Cycles' noise
 
 
+# What was measured about failures the export does not note (25 Nov 2026, at the commit of the closures work).
+_ROUGH_GLASS = (
+    "Diagnosed, not fixed: the excess lies in the sphere's lower half, where the floor's caustic from the sun "
+    "and the point light, made by rough glass, is seen through rough glass (hot blocks of 1.4-1.9x beside "
+    "darker ones). In a scene rebuilt from arrays (the same sphere, floor and lights) the sphere's ratio to the "
+    "reference moves with convergence on both sides: 0.79 -> 0.90 from 16 to 64 iterations under the point "
+    "light alone, 1.036 -> 1.028 from 256 to 2048 reference samples under the 2-degree sun, and 1.00 under a "
+    "20-degree sun; under the uniform world alone 0.97. Neither estimate is converged for light from small "
+    "lights through two rough interfaces; worth an issue of its own.")
+DIAGNOSED = {
+    "glass_ggx_0.3": _ROUGH_GLASS,
+    "principled_transmission_1_rough_0.3": _ROUGH_GLASS,
+    "glossy_multiggx_0.5": (
+        "The reference agrees with Photon Splat (0.917): the closure, not the pipeline. Our multiscatter GGX "
+        "matches Cycles' random walk in a white furnace within 0.85 % (docs/closures.md); Cycles evaluates "
+        "multiscatter GGX stochastically, and its eval (used by light sampling) and its sampling differ "
+        "(docs/closures.md), which a sphere lit by small lights weighs differently from a furnace."),
+    "principled_subsurface_0.5": (
+        "Subsurface scattering is rendered as diffuse (noted on the material); Cycles' random walk is darker."),
+}
+
+
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", action="append", default=[],
@@ -541,6 +563,8 @@ def write_markdown(results, args, path):
             for r in failing:
                 why = "; ".join(r["warnings"]) or "no export note"
                 lines.append(f"- `{r['name']}`: ratio {r['ps_ratio']:.3f}, chroma {r['ps_chroma']:.3f}: {why}")
+                if r["name"] in DIAGNOSED:
+                    lines.append(f"  {DIAGNOSED[r['name']]}")
     if glints:
         lines += ["", "## Glints (whole image)", "",
                   "| scene | Cycles mean | Cycles noise | spp | PS ratio | PS chroma | PS | ref ratio | ref | glass peak "

@@ -50,18 +50,18 @@ constexpr float kInvPi = 0.318309886183790671538f;
 
 bool is_black(const glm::vec3& v) { return v.x <= 0.0f && v.y <= 0.0f && v.z <= 0.0f; }
 
-// The view sample's stored reflection parts as a BSDF (the transmission parts went on along the camera path).
-Bsdf bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes) {
-    Bsdf b;
+// The view sample's stored reflection parts as a BSDF (the transmission parts went on along the camera path),
+// written into `b` (reused from sample to sample: its lobes are only written where the sample has them).
+void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.n = s.shading_normal;
     b.ng = s.normal;
     b.wo = s.wo;
     b.lambert = s.albedo;
+    b.lobe_count = 0;
     if (s.flags & kGlossy) {
         b.lobe_count = static_cast<int>(std::min<uint32_t>(s.lobe_count, kMaxLobes));
         for (int k = 0; k < b.lobe_count; ++k) b.lobes[k] = lobes[s.lobe_begin + static_cast<uint32_t>(k)];
     }
-    return b;
 }
 
 }  // namespace
@@ -191,6 +191,35 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     return sum + bsdf_sum / static_cast<float>(m);
 }
 
+// direct_light_at for a Lambert-only view sample, written out: light sampling alone, ρ/π applied once at the
+// end (the common case, kept as lean as it was before the closures: no Bsdf, no MIS).
+glm::vec3 lambert_direct_light(const DirectLightContext& c, const ViewSample& s, const glm::vec3& x, Rng& rng,
+                               uint64_t& rays) {
+    const glm::vec3 origin = offset_ray_origin(x, s.normal, s.rounding_scale);
+    glm::vec3 sum(0.0f);
+    for (size_t l = 0; l < c.sources.size(); ++l) {
+        const int n = c.sources.is_delta(l) ? 1 : c.samples_per_light;
+        const StrataGrid grid = strata_grid(n);
+        glm::vec3 light_sum(0.0f);
+        for (int k = 0; k < n; ++k) {
+            float u1 = rng.uniform(), u2 = rng.uniform();
+            const float u3 = rng.uniform();
+            grid.place(k, u1, u2);
+            const LightIncidence in = c.sources.sample_incidence(l, x, s.normal, u1, u2, u3);
+            if (!(glm::dot(in.wi, s.normal) > 0.0f)) continue;
+            const float cos_shading = glm::dot(in.wi, s.shading_normal);
+            if (!(cos_shading > 0.0f) || is_black(in.value)) continue;
+            ++rays;
+            const glm::vec3 t =
+                shadow_transmittance(c.scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), c.transparency);
+            if (is_black(t)) continue;
+            light_sum += in.value * t * cos_shading;
+        }
+        sum += light_sum / static_cast<float>(n);
+    }
+    return s.albedo * kInvPi * sum;
+}
+
 std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
                                             Stats& stats) {
@@ -209,13 +238,18 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             return;
         }
         uint64_t rays = 0;
+        Bsdf b;
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
             // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
             Rng rng(settings.seed, RngDomain::direct_light, uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32));
-            const Bsdf b = bsdf_of(s, samples.lobes);
-            out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                    LobeSet::reflection, rng, rays);
+            if (s.flags & kGlossy) {
+                bsdf_of(s, samples.lobes, b);
+                out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
+                                                        LobeSet::reflection, rng, rays);
+            } else {
+                out[i] = s.throughput * lambert_direct_light(context, s, s.position + samples.origin, rng, rays);
+            }
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

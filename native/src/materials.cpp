@@ -122,6 +122,7 @@ void lower_simple_material(Material& m) {
 void finalize_material(Material& m) {
     m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = m.view_dependent = false;
     m.anisotropic = m.textured = false;
+    m.lambert_only = !m.holdout;
     for (const Closure& c : m.closures) {
         if (c.color == glm::vec3(0.0f)) continue;  // weighs nothing anywhere
         if (c.is_delta())
@@ -136,6 +137,8 @@ void finalize_material(Material& m) {
             (c.kind == ClosureKind::reflection || c.kind == ClosureKind::refraction))
             m.anisotropic = true;
         if (c.texture >= 0) m.textured = true;
+        if (!(c.kind == ClosureKind::diffuse && c.roughness == 0.0f) || c.factors_on != 0 || c.factors_off != 0)
+            m.lambert_only = false;
     }
     if (m.holdout) m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = false;
 }

@@ -89,6 +89,27 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const SurfacePoint s = surface_at(scene, ray, hit);
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
+        if (m.lambert_only) {
+            // Most surfaces: stored, then a cosine-weighted bounce with roulette on the albedo (no Bsdf to build).
+            if (!direct) {
+                const bool caustic = only_specular_so_far;
+                out.push_back(Photon{s.position, -ray.direction, s.geometric_normal,
+                                     caustic ? power * caustic_weight : power,
+                                     caustic ? static_cast<uint32_t>(kCaustic) : 0u});
+            }
+            if (weighting.aimed) return;  // an aimed photon stands for caustics only
+            only_specular_so_far = false;
+            direct = false;
+            const glm::vec3 albedo = lambert_albedo(scene, s);
+            const float keep = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
+            if (!(keep > 0.0f) || rng.uniform() >= keep) return;
+            power *= albedo / keep;
+            const float v1 = rng.uniform(), v2 = rng.uniform();
+            const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
+            if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below
+            ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
+            continue;
+        }
         const Bsdf b = shade(scene, s, -ray.direction);
         if (!direct && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far;

@@ -111,6 +111,17 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
 
 }  // namespace
 
+glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface) {
+    glm::vec3 albedo(0.0f);
+    for (const Closure& c : surface.material->closures) {
+        glm::vec3 weight = c.color;
+        if (c.texture >= 0 && c.texture_target == TextureTarget::color)
+            weight *= scene.textures()[static_cast<size_t>(c.texture)].lookup(surface.uv);
+        albedo += weight;
+    }
+    return albedo;
+}
+
 Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
     Bsdf b;
     const Material& m = *surface.material;

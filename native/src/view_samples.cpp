@@ -75,25 +75,26 @@ struct PixelPaths {
 // after a delta bounce (or by a camera ray), nothing else finds them: 1.
 float emitter_weight(const CameraPath& path) { return path.after_lobe ? 0.0f : 1.0f; }
 
-// The view sample of b's reflection parts at surface s, reached by `path`.
-void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf& b,
-                     const glm::vec3& weight) {
+// The view sample of b's reflection parts at surface s, reached by `path` (b null: a lambert_only surface of
+// albedo `lambert`, seen along `wo`).
+void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf* b,
+                     const glm::vec3& lambert, const glm::vec3& wo, const glm::vec3& weight) {
     ViewSample sample{};
     sample.position = s.position;  // made camera-relative by the caller
-    sample.normal = b.ng;
-    sample.shading_normal = b.n;
+    sample.normal = s.geometric_normal;
+    sample.shading_normal = b ? b->n : s.shading_normal;
     sample.rounding_scale = s.rounding_scale;
-    sample.wo = b.wo;
-    sample.albedo = b.lambert;
+    sample.wo = wo;
+    sample.albedo = lambert;
     sample.throughput = weight;
     sample.pixel = p.pixel;
     sample.flags = (path.depth > 0 ? kViaSpecular : 0u) | (std::min<uint32_t>(path.branch, 0xffu) << kBranchShift);
     sample.depth = p.first.depth;
     sample.lobe_begin = static_cast<uint32_t>(p.found_lobes.size());
     sample.lobe_count = 0;
-    for (int k = 0; k < b.lobe_count; ++k) {
-        if (is_transmission(b.lobes[k])) continue;
-        p.found_lobes.push_back(b.lobes[k]);
+    for (int k = 0; b != nullptr && k < b->lobe_count; ++k) {
+        if (is_transmission(b->lobes[k])) continue;
+        p.found_lobes.push_back(b->lobes[k]);
         ++sample.lobe_count;
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
@@ -149,6 +150,10 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
         if (s.material->emission != glm::vec3(0.0f)) p.emitted += path.throughput * s.material->emission * emitter_weight(path);
+        if (s.material->lambert_only) {  // most surfaces: one part, the view sample, without a Bsdf to build
+            add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s), -ray.direction, path.throughput);
+            return;
+        }
         const Bsdf b = shade(scene, s, -ray.direction);
 
         // The parts and their weights (luminance of what each scatters, roughly).
@@ -207,7 +212,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             }
             next[next_count++] = n;
         };
-        if (take[0]) add_view_sample(p, path, s, b, path.throughput / probability[0]);
+        if (take[0]) add_view_sample(p, path, s, &b, b.lambert, b.wo, path.throughput / probability[0]);
         const bool sampled_here = take[0];
         // Refraction first, mirror last: a pixel split at glass keeps its refracted path, the reflected one branches.
         if (take[3]) {

@@ -51,6 +51,7 @@ struct Material {
     bool view_dependent = false;   // a closure's weight depends on the direction (factors)
     bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
     bool textured = false;         // a closure reads a texture: hits need their UV
+    bool lambert_only = false;     // only Lambert closures without factors: the stages take their albedo directly
 
     // Only delta closures: every path that reaches the surface goes on (no view sample, no photon stored).
     bool is_specular() const { return has_delta && !has_lobes; }
