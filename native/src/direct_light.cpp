@@ -191,35 +191,6 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     return sum + bsdf_sum / static_cast<float>(m);
 }
 
-// direct_light_at for a Lambert-only view sample, written out: light sampling alone, ρ/π applied once at the
-// end (the common case, kept as lean as it was before the closures: no Bsdf, no MIS).
-glm::vec3 lambert_direct_light(const DirectLightContext& c, const ViewSample& s, const glm::vec3& x, Rng& rng,
-                               uint64_t& rays) {
-    const glm::vec3 origin = offset_ray_origin(x, s.normal, s.rounding_scale);
-    glm::vec3 sum(0.0f);
-    for (size_t l = 0; l < c.sources.size(); ++l) {
-        const int n = c.sources.is_delta(l) ? 1 : c.samples_per_light;
-        const StrataGrid grid = strata_grid(n);
-        glm::vec3 light_sum(0.0f);
-        for (int k = 0; k < n; ++k) {
-            float u1 = rng.uniform(), u2 = rng.uniform();
-            const float u3 = rng.uniform();
-            grid.place(k, u1, u2);
-            const LightIncidence in = c.sources.sample_incidence(l, x, s.normal, u1, u2, u3);
-            if (!(glm::dot(in.wi, s.normal) > 0.0f)) continue;
-            const float cos_shading = glm::dot(in.wi, s.shading_normal);
-            if (!(cos_shading > 0.0f) || is_black(in.value)) continue;
-            ++rays;
-            const glm::vec3 t =
-                shadow_transmittance(c.scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), c.transparency);
-            if (is_black(t)) continue;
-            light_sum += in.value * t * cos_shading;
-        }
-        sum += light_sum / static_cast<float>(n);
-    }
-    return s.albedo * kInvPi * sum;
-}
-
 std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
                                             Stats& stats) {
@@ -243,13 +214,9 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
             const ViewSample& s = samples.samples[i];
             // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
             Rng rng(settings.seed, RngDomain::direct_light, uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32));
-            if (s.flags & kGlossy) {
-                bsdf_of(s, samples.lobes, b);
-                out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                        LobeSet::reflection, rng, rays);
-            } else {
-                out[i] = s.throughput * lambert_direct_light(context, s, s.position + samples.origin, rng, rays);
-            }
+            bsdf_of(s, samples.lobes, b);
+            out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
+                                                    LobeSet::reflection, rng, rays);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());
