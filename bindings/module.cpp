@@ -52,6 +52,18 @@ py::handle dict_item(const py::dict& d, const char* key) {
     return d.contains(key) ? py::handle(d[key]) : py::handle();
 }
 
+// One of the core's names (closure kind, distribution...), the error naming the whole field it came from.
+template <typename Parse>
+auto named(Parse parse, const py::handle& value, const std::string& field) {
+    try {
+        return parse(py::cast<std::string>(value));
+    } catch (const ps::InvalidInput& e) {
+        const std::string message = e.what();
+        const size_t colon = message.find(": ");
+        throw ps::InvalidInput(field, colon == std::string::npos ? message : message.substr(colon + 2));
+    }
+}
+
 uint32_t factor_bits(const py::handle& indices, const std::string& field) {
     uint32_t bits = 0;
     for (const py::handle& item : py::iterable(py::reinterpret_borrow<py::object>(indices))) {
@@ -80,10 +92,11 @@ std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& 
                 throw ps::InvalidInput(where, "unknown key '" + k + "'");
         }
         ps::Closure c;
-        if (auto v = dict_item(d, "kind")) c.kind = ps::closure_kind_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "kind")) c.kind = named(ps::closure_kind_from_string, v, where + ".kind");
         else throw ps::InvalidInput(where + ".kind", "is required");
-        if (auto v = dict_item(d, "distribution")) c.distribution = ps::distribution_from_string(py::cast<std::string>(v));
-        if (auto v = dict_item(d, "fresnel")) c.fresnel = ps::fresnel_kind_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "distribution"))
+            c.distribution = named(ps::distribution_from_string, v, where + ".distribution");
+        if (auto v = dict_item(d, "fresnel")) c.fresnel = named(ps::fresnel_kind_from_string, v, where + ".fresnel");
         if (auto v = dict_item(d, "color")) c.color = vec3(py::reinterpret_borrow<py::object>(v), where + ".color");
         if (auto v = dict_item(d, "specular_color"))
             c.specular_color = vec3(py::reinterpret_borrow<py::object>(v), where + ".specular_color");
@@ -93,7 +106,7 @@ std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& 
         if (auto v = dict_item(d, "ior")) c.ior = py::cast<float>(v);
         if (auto v = dict_item(d, "texture")) c.texture = py::cast<int32_t>(v);
         if (auto v = dict_item(d, "texture_target"))
-            c.texture_target = ps::texture_target_from_string(py::cast<std::string>(v));
+            c.texture_target = named(ps::texture_target_from_string, v, where + ".texture_target");
         if (auto v = dict_item(d, "factors_on")) c.factors_on = factor_bits(v, where + ".factors_on");
         if (auto v = dict_item(d, "factors_off")) c.factors_off = factor_bits(v, where + ".factors_off");
         out.push_back(c);
@@ -110,7 +123,7 @@ std::vector<ps::MixFactor> factor_list(const py::object& obj, const std::string&
         if (!py::isinstance<py::dict>(item)) throw ps::InvalidInput(where, "must be a dict");
         const py::dict d = py::reinterpret_borrow<py::dict>(item);
         ps::MixFactor f;
-        if (auto v = dict_item(d, "kind")) f.kind = ps::factor_kind_from_string(py::cast<std::string>(v));
+        if (auto v = dict_item(d, "kind")) f.kind = named(ps::factor_kind_from_string, v, where + ".kind");
         else throw ps::InvalidInput(where + ".kind", "is required");
         if (auto v = dict_item(d, "value")) f.value = py::cast<float>(v);
         out.push_back(f);
