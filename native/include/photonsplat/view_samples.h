@@ -1,7 +1,8 @@
-// Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors and glass to the first
-// non-specular hit. That hit is the pixel's view sample: what photons are later splatted onto. Where the ray
-// meets glass, it is split once: the refracted and the reflected path each end in a view sample of the pixel,
-// weighted by Fresnel, so a pixel has one or two samples.
+// Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors, glass and rough transmission to the
+// surfaces that keep it: a view sample holds a surface's reflection parts (shading.h), what photons are later
+// splatted onto. At the first surface with more than one part (the reflection lobes, a mirror, a refraction,
+// transparency, a rough transmission) the path is split once: each part ends in a view sample of its own, weighted
+// by the part (glass: the refracted and the reflected path, weighted by Fresnel), so a pixel has one sample or a few.
 #pragma once
 #include <cstdint>
 #include <vector>
