@@ -120,7 +120,7 @@ void lower_simple_material(Material& m) {
 }
 
 void finalize_material(Material& m) {
-    m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = m.view_dependent = false;
+    m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = false;
     m.anisotropic = m.textured = false;
     m.lambert_only = !m.holdout;
     for (const Closure& c : m.closures) {
@@ -132,7 +132,6 @@ void finalize_material(Material& m) {
         if (!c.is_delta() && !(c.kind == ClosureKind::diffuse && c.roughness == 0.0f)) m.directional = true;
         if (c.transmits()) m.transmits = true;
         if (c.kind == ClosureKind::transparent) m.transparent = true;
-        if (c.factors_on != 0 || c.factors_off != 0) m.view_dependent = true;
         if (!c.is_delta() && c.alpha_x != c.alpha_y &&
             (c.kind == ClosureKind::reflection || c.kind == ClosureKind::refraction))
             m.anisotropic = true;

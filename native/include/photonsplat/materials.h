@@ -48,7 +48,6 @@ struct Material {
     bool directional = false;      // a non-delta closure other than Lambert diffuse: the BRDF depends on directions
     bool transmits = false;        // a closure sends light to the other side
     bool transparent = false;      // a transparent closure: shadow rays pass through, attenuated
-    bool view_dependent = false;   // a closure's weight depends on the direction (factors)
     bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
     bool textured = false;         // a closure reads a texture: hits need their UV
     bool lambert_only = false;     // only Lambert closures without factors: the stages take their albedo directly
