@@ -102,9 +102,6 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     p.found.push_back(sample);
 }
 
-// A part of the BSDF at a camera path's vertex: a weight to choose it by and what it does.
-enum class Part { receive, transmission, mirror, refraction, transparent };
-
 // Follows one camera path (and returns when it ends in a view sample, is absorbed, escapes or is dropped),
 // adding emission, background and lights seen along the way to p.emitted. At the first surface whose BSDF has
 // more than one part (lobes, mirror, refraction, transparency, rough transmission), every part is followed:
@@ -133,7 +130,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 if (light == nullptr || p.sources->is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
-                p.emitted += path.throughput * h.radiance * emitter_weight(path);
+                p.emitted += path.throughput * h.radiance;
             }
         }
         if (!found) {
@@ -156,7 +153,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         }
         const Bsdf b = shade(scene, s, -ray.direction);
 
-        // The parts and their weights (luminance of what each scatters, roughly).
+        // The parts and their weights (luminance of what each scatters, roughly), indexed: 0 the reflection parts
+        // (the view sample), 1 the transmission lobes, 2 the mirror, 3 the sharp refraction, 4 transparency.
         float weight[5] = {0.0f, 0.0f, luminance(b.mirror), luminance(b.refraction), luminance(b.transparent)};
         weight[0] = luminance(b.lambert);
         for (int k = 0; k < b.lobe_count; ++k)
