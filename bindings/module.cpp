@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "arrays.h"
 #include "background.h"
@@ -75,22 +76,33 @@ uint32_t factor_bits(const py::handle& indices, const std::string& field) {
     return bits;
 }
 
-std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& field) {
-    std::vector<ps::Closure> out;
+// A list of dicts (closures, factors): each item checked to be a dict, its keys against `keys` when given, then
+// read by `read(dict, where)`; errors name the item, e.g. "material 'm'.closures[2]".
+template <typename T, typename Read>
+std::vector<T> dict_list(const py::object& obj, const std::string& field, const std::vector<std::string>& keys,
+                         Read read) {
+    std::vector<T> out;
     if (obj.is_none()) return out;
     size_t i = 0;
     for (const py::handle& item : py::iterable(obj)) {
         const std::string where = field + "[" + std::to_string(i++) + "]";
         if (!py::isinstance<py::dict>(item)) throw ps::InvalidInput(where, "must be a dict");
         const py::dict d = py::reinterpret_borrow<py::dict>(item);
-        static const char* const kKeys[] = {"kind", "distribution", "fresnel", "color", "specular_color", "roughness",
-                                            "alpha_x", "alpha_y", "ior", "texture", "texture_target", "factors_on",
-                                            "factors_off"};
         for (const auto& [key, value] : d) {
             const std::string k = py::str(key);
-            if (std::find(std::begin(kKeys), std::end(kKeys), k) == std::end(kKeys))
+            if (!keys.empty() && std::find(keys.begin(), keys.end(), k) == keys.end())
                 throw ps::InvalidInput(where, "unknown key '" + k + "'");
         }
+        out.push_back(read(d, where));
+    }
+    return out;
+}
+
+std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& field) {
+    static const std::vector<std::string> kKeys = {"kind", "distribution", "fresnel", "color", "specular_color",
+                                                   "roughness", "alpha_x", "alpha_y", "ior", "texture",
+                                                   "texture_target", "factors_on", "factors_off"};
+    return dict_list<ps::Closure>(obj, field, kKeys, [](const py::dict& d, const std::string& where) {
         ps::Closure c;
         if (auto v = dict_item(d, "kind")) c.kind = named(ps::closure_kind_from_string, v, where + ".kind");
         else throw ps::InvalidInput(where + ".kind", "is required");
@@ -109,26 +121,18 @@ std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& 
             c.texture_target = named(ps::texture_target_from_string, v, where + ".texture_target");
         if (auto v = dict_item(d, "factors_on")) c.factors_on = factor_bits(v, where + ".factors_on");
         if (auto v = dict_item(d, "factors_off")) c.factors_off = factor_bits(v, where + ".factors_off");
-        out.push_back(c);
-    }
-    return out;
+        return c;
+    });
 }
 
 std::vector<ps::MixFactor> factor_list(const py::object& obj, const std::string& field) {
-    std::vector<ps::MixFactor> out;
-    if (obj.is_none()) return out;
-    size_t i = 0;
-    for (const py::handle& item : py::iterable(obj)) {
-        const std::string where = field + "[" + std::to_string(i++) + "]";
-        if (!py::isinstance<py::dict>(item)) throw ps::InvalidInput(where, "must be a dict");
-        const py::dict d = py::reinterpret_borrow<py::dict>(item);
+    return dict_list<ps::MixFactor>(obj, field, {}, [](const py::dict& d, const std::string& where) {
         ps::MixFactor f;
         if (auto v = dict_item(d, "kind")) f.kind = named(ps::factor_kind_from_string, v, where + ".kind");
         else throw ps::InvalidInput(where + ".kind", "is required");
         if (auto v = dict_item(d, "value")) f.value = py::cast<float>(v);
-        out.push_back(f);
-    }
-    return out;
+        return f;
+    });
 }
 
 }  // namespace
