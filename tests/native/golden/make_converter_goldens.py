@@ -20,6 +20,7 @@
 # composing each channel's curve with the combined one), and written out in the op table's layout.
 import math
 import os
+import random
 import struct
 import sys
 import tempfile
@@ -53,6 +54,17 @@ def cfloat(x):
 #   (optional): a function(node) run after the properties are set.
 ROWS = []
 
+# Fixed-seed random cases beside the hand-picked ones, so that the hand-picked edges are not all that is checked.
+RNG = random.Random(1234)
+
+
+def rnd(lo, hi):
+    return round(RNG.uniform(lo, hi), 4)
+
+
+def rvec(lo, hi):
+    return (rnd(lo, hi), rnd(lo, hi), rnd(lo, hi))
+
 
 def row(**kw):
     ROWS.append(kw)
@@ -68,6 +80,7 @@ MATH_CASES = [
     [2.5, -1.25, 0.5], [7.3, 2.1, -3.2], [-0.3, -0.7, 1.0], [1.0, 1.0001, 0.001], [-4.6, 2.0, 0.0],
     [0.75, -2.0, 3.0], [-0.5, -0.5, -2.0], [1.7, 1.2, 1.2],
 ]
+MATH_CASES += [[rnd(-3.0, 3.0), rnd(-3.0, 3.0), rnd(-1.0, 2.0)] for _ in range(16)]
 for i, name in enumerate(MATH_OPS):
     row(label="math " + name, op="math", params=[i, 0], node="ShaderNodeMath",
         props={"operation": name, "use_clamp": False}, sockets=[(0, "f"), (1, "f"), (2, "f")],
@@ -93,6 +106,7 @@ VMATH_CASES = [
     [(-0.6, -0.25, 1.9), (-1.5, 0.8, 0.8), (2.0, 2.0, -1.0), 0.5],
     [(7.25, -3.5, 0.125), (2.0, -1.5, 0.75), (-1.0, 0.5, 0.25), 1.0],
 ]
+VMATH_CASES += [[rvec(-3.0, 3.0), rvec(-3.0, 3.0), rvec(-2.0, 2.0), rnd(0.3, 2.0)] for _ in range(10)]
 for i, name in enumerate(VMATH_OPS):
     value = name in VMATH_VALUE_OPS
     row(label="vector_math " + name, op="vector_math", params=[i], node="ShaderNodeVectorMath",
@@ -138,6 +152,7 @@ MIX_CASES = [
     [0.6, (1.5, -0.2, 0.0), (2.0, 0.5, -0.5)], [0.7, (0.0, 0.0, 0.0), (0.4, 0.8, 0.2)],
     [0.35, (0.8, 0.8, 0.8), (0.2, 0.2, 0.2)], [0.9, (0.25, 0.55, 0.75), (1.0, 0.0, 0.5)],
 ]
+MIX_CASES += [[rnd(-0.2, 1.2), rvec(-0.1, 1.2), rvec(-0.1, 1.2)] for _ in range(10)]
 for i, name in enumerate(MIX_BLENDS):
     for cf, cr in ((1, 0), (0, 1)) if name in ("MIX", "ADD", "DIVIDE", "DODGE", "BURN", "LINEAR_LIGHT",
                                                "OVERLAY", "HUE") else ((1, 0), (0, 0)):
@@ -166,11 +181,13 @@ for name in ("MIX", "OVERLAY", "SOFT_LIGHT"):
 
 COLOR_CASES = [(0.2, 0.4, 0.6), (0.9, 0.1, 0.5), (0.0, 0.0, 0.0), (0.5, 0.5, 0.5), (1.5, 0.3, -0.2),
                (0.05, 0.95, 0.4), (0.7, 0.2, 0.2), (0.3, 0.3, 0.8), (2.0, 1.0, 0.5), (0.6, 0.6, 0.1)]
+COLOR_CASES += [rvec(0.0, 1.2) for _ in range(8)]
 HSV_CASES = [[0.5, 1.0, 1.0, 1.0, COLOR_CASES[0]], [0.2, 1.3, 0.8, 1.0, COLOR_CASES[1]],
              [0.9, 0.5, 1.2, 0.6, COLOR_CASES[2]], [0.0, 2.0, 1.0, 1.0, COLOR_CASES[3]],
              [0.75, 1.0, 1.0, 0.5, COLOR_CASES[4]], [-0.3, 0.7, 0.9, 1.0, COLOR_CASES[5]],
              [1.4, 1.0, 2.0, 1.0, COLOR_CASES[6]], [0.6, 0.0, 1.0, 0.8, COLOR_CASES[7]],
              [0.45, 1.5, 0.5, 1.3, COLOR_CASES[8]]]
+HSV_CASES += [[rnd(0.0, 1.0), rnd(0.0, 2.0), rnd(0.0, 2.0), rnd(0.0, 1.0), rvec(0.0, 1.2)] for _ in range(8)]
 row(label="hue_saturation_value", op="hue_saturation_value", params=[], node="ShaderNodeHueSaturation", props={},
     sockets=[(0, "f"), (1, "f"), (2, "f"), (3, "f"), (4, "v")], outs=[(0, "v")], our_outs=[0], cases=HSV_CASES)
 row(label="gamma", op="gamma", params=[], node="ShaderNodeGamma", props={}, sockets=[(0, "v"), (1, "f")],
@@ -197,11 +214,13 @@ row(label="rgb_to_bw", op="rgb_to_bw", params=[], node="ShaderNodeRGBToBW", prop
 row(label="blackbody", op="blackbody", params=[], node="ShaderNodeBlackbody", props={}, sockets=[(0, "f")],
     outs=[(0, "v")], our_outs=[0],
     cases=[[t] for t in [500.0, 800.0, 900.0, 965.0, 1000.0, 1300.0, 1500.0, 2000.0, 2700.0, 3500.0, 4500.0,
-                         6500.0, 8000.0, 11999.0, 12000.0, 25000.0]])
+                         6500.0, 8000.0, 11999.0, 12000.0, 25000.0, 799.9,
+                         1167.0, 1449.0, 1902.0, 3315.0, 6365.0, 6364.9]])
 row(label="wavelength", op="wavelength", params=[], node="ShaderNodeWavelength", props={}, sockets=[(0, "f")],
     outs=[(0, "v")], our_outs=[0],
     cases=[[w] for w in [300.0, 374.0, 377.5, 380.0, 382.5, 450.0, 500.2, 555.0, 590.0, 610.0, 650.0, 700.0,
-                         779.0, 780.0, 784.0, 786.0]])
+                         779.0, 780.0, 784.0, 786.0, 375.0, 375.5,
+                         779.99, 420.3, 530.7]])
 
 MAPPING_CASES = [
     [(0.5, -1.0, 2.0), (0.1, 0.2, 0.3), (0.3, -0.6, 1.2), (1.0, 2.0, 0.5)],
@@ -210,6 +229,7 @@ MAPPING_CASES = [
     [(0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)],
     [(2.0, 3.0, -1.0), (-1.0, 0.25, 0.5), (-0.4, 0.9, 0.2), (-2.0, 0.5, 1.5)],
 ]
+MAPPING_CASES += [[rvec(-2.0, 2.0), rvec(-1.0, 1.0), rvec(-3.2, 3.2), rvec(-2.0, 2.0)] for _ in range(8)]
 for i, name in enumerate(["POINT", "TEXTURE", "VECTOR", "NORMAL"]):
     row(label="mapping " + name, op="mapping", params=[i], node="ShaderNodeMapping", props={"vector_type": name},
         sockets=[(0, "v"), (1, "v"), (2, "v"), (3, "v")], outs=[(0, "v")], our_outs=[0], cases=MAPPING_CASES)
@@ -221,6 +241,8 @@ ROTATE_CASES = [
     [(2.0, 0.0, -1.0), (0.0, 1.0, 0.0), (0.3, -2.0, 0.6), 3.5, (2.5, 0.1, -0.8)],
     [(0.1, 0.2, 0.3), (-0.3, 0.2, 0.1), (0.0, 1.0, 0.0), 0.0, (-1.0, 2.0, 0.4)],
 ]
+ROTATE_CASES += [[rvec(-2.0, 2.0), rvec(-1.0, 1.0), rvec(-1.0, 1.0), rnd(-6.3, 6.3), rvec(-3.2, 3.2)]
+                 for _ in range(8)]
 for i, name in enumerate(["AXIS_ANGLE", "X_AXIS", "Y_AXIS", "Z_AXIS", "EULER_XYZ"]):
     for inv in (0, 1):
         row(label="vector_rotate %s invert %d" % (name, inv), op="vector_rotate", params=[i, inv],
@@ -279,10 +301,10 @@ def set_curve(curve, pts):
         p.new(xy[0], xy[1])
 
 
-def curves_setup(kind):
+def curves_setup(kind, extend="EXTRAPOLATED"):
     def setup(node):
         m = node.mapping
-        m.extend = "EXTRAPOLATED"
+        m.extend = extend
         if kind == "rgb":
             set_curve(m.curves[0], [(0.0, 0.1), (0.5, 0.7), (1.0, 0.9)])
             set_curve(m.curves[1], [(0.1, 0.0), (0.9, 1.0)])
@@ -348,6 +370,20 @@ row(label="float_curve", op="float_curve", params=None, node="ShaderNodeFloatCur
     cases=[[f, v] for f, v in [(1.0, 0.1), (1.0, 0.5), (1.0, -0.3), (1.0, 1.4), (0.5, 0.8), (1.0, 0.999),
                                (0.0, 0.3), (1.0, 0.65), (-0.5, 0.2)]],
     setup=curves_setup("float"), bake=bake_curves("float"))
+
+# Blender's other curve extension, "extended horizontally", which Cycles gives by not extrapolating: the op's table
+# layout always extrapolates (it has no flag for this), so only positions inside the curves' range are checked.
+def inside(lo, hi):
+    return lambda c: all(lo <= x <= hi for x in (c[1] if isinstance(c[1], tuple) else (c[1],)))
+
+
+row(label="rgb_curves horizontal", op="rgb_curves", params=None, node="ShaderNodeRGBCurve", props={},
+    sockets=[(0, "f"), (1, "v")], outs=[(0, "v")], our_outs=[0], cases=list(filter(inside(0.0, 1.0), CURVE_CASES)),
+    setup=curves_setup("rgb", "HORIZONTAL"), bake=bake_curves("rgb"))
+row(label="float_curve horizontal", op="float_curve", params=None, node="ShaderNodeFloatCurve", props={},
+    sockets=[(0, "f"), (1, "f")], outs=[(0, "f")], our_outs=[0],
+    cases=[[f, v] for f, v in [(1.0, 0.1), (1.0, 0.5), (0.5, 0.8), (1.0, 0.999), (1.0, 0.65), (1.0, 0.0)]],
+    setup=curves_setup("float", "HORIZONTAL"), bake=bake_curves("float"))
 
 
 # --- the scene -----------------------------------------------------------------------------------------------
