@@ -6,8 +6,9 @@
 // declined.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
-#include <cstring>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>

@@ -304,8 +304,10 @@ float table_lookup(const float* t, int n, int stride, float f, bool interpolate,
     return a;
 }
 
-// Curves extrapolate: the table layout has no flag for Blender's "extended horizontally" curve extension, which
-// Cycles gives by clamping instead (see the report in the golden script's history; a third param would carry it).
+// Curves always extrapolate: that is Blender's default curve extension ("extrapolated"). Its other one,
+// "extended horizontally", Cycles gives by looking up without extrapolation (the position clamped to the table);
+// the op's params have no flag for it yet, so such a curve is right inside its range only. A third param (Cycles'
+// `extrapolate`) passed here instead of this constant is all it would take.
 constexpr bool kCurvesExtrapolate = true;
 
 // --- Mix ---------------------------------------------------------------------------------------------------------
