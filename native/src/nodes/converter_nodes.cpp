@@ -14,7 +14,8 @@
 //                 (value − min x) / (max x − min x); beyond [0, 1] the table is extended along the slope of its
 //                 last (first) two entries, which is Cycles' "extrapolated" curve extension.
 //   float_curve   params (offset, entries): min x, max x, then entries values; the same lookup.
-// A ramp needs at least 1 entry and a curve 2; fewer, or a null table, gives zeros.
+// A ramp needs at least 1 entry and a curve 2; fewer, a negative offset or a null table gives zeros. That the
+// table holds offset + the layout's size is validate()'s check (shader_program.h), not repeated per hit.
 //
 // Invalid modes (a param outside its enum) give zeros. Nothing here indexes memory from a float without
 // clamping the index first, so NaN and infinite inputs give NaN or infinite outputs at worst, never a crash.
