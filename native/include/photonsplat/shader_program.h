@@ -32,7 +32,7 @@ namespace ps {
     X(copy_float,        0, "f",      "f")                                                                         \
     X(copy_vector,       0, "v",      "v")                                                                         \
     X(combine_xyz,       0, "fff",    "v")                                                                         \
-    X(color_to_float,    0, "v",      "f")   /* Cycles' colour → float: luminance (0.2126, 0.7152, 0.0722) */     \
+    X(color_to_float,    0, "v",      "f")   /* Cycles' colour → float: luminance, nodes/color_math.h */        \
     X(vector_to_float,   0, "v",      "f")   /* vector → float: the average of the three */                        \
     X(float_to_vector,   0, "f",      "v")   /* broadcast */                                                       \
     /* --- the shading point (shader_globals_ops.cpp) --- */                                                      \

@@ -19,7 +19,7 @@ constexpr float kXyzToRgb[3][3] = {
 
 const glm::vec3 kRgbToY(0.212672996f, 0.715152639f, 0.072175460f);
 
-float luminance(const glm::vec3& rgb) { return rgb.x * kRgbToY.x + rgb.y * kRgbToY.y + rgb.z * kRgbToY.z; }
+float cycles_luminance(const glm::vec3& rgb) { return rgb.x * kRgbToY.x + rgb.y * kRgbToY.y + rgb.z * kRgbToY.z; }
 
 glm::vec3 xyz_to_rgb(const glm::vec3& xyz) {
     glm::vec3 out;

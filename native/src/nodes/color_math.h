@@ -30,7 +30,7 @@ glm::vec3 hsl_to_rgb(const glm::vec3& hsl);
 // Luminance of a scene-linear colour: Cycles' rgb_to_y, which it derives from the OCIO config's XYZ transform
 // (Blender 3.4's config: Rec.709 primaries, via its aces_interchange role), not the config's rounded luma line.
 extern const glm::vec3 kRgbToY;
-float luminance(const glm::vec3& rgb);
+float cycles_luminance(const glm::vec3& rgb);
 
 // CIE XYZ (D65) to scene-linear Rec.709, as Cycles 3.4 derives it for Blender's default config.
 glm::vec3 xyz_to_rgb(const glm::vec3& xyz);

@@ -743,7 +743,7 @@ bool run_converter_op(ShaderOp op, const OpArgs& a, const float* tables) {
             return true;
         }
         case ShaderOp::rgb_to_bw:
-            a.set(0, luminance(a.v(0)));
+            a.set(0, cycles_luminance(a.v(0)));
             return true;
         case ShaderOp::blackbody:
             a.set(0, blackbody(a.f(0)));

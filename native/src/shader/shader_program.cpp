@@ -8,6 +8,7 @@
 
 #include "photonsplat/errors.h"
 #include "photonsplat/scene.h"
+#include "nodes/color_math.h"
 #include "shader/op_args.h"
 
 namespace ps {
@@ -81,11 +82,7 @@ void run_move(ShaderOp op, const OpArgs& a) {
         case ShaderOp::copy_float: a.set(0, a.f(0)); break;
         case ShaderOp::copy_vector: a.set(0, a.v(0)); break;
         case ShaderOp::combine_xyz: a.set(0, glm::vec3(a.f(0), a.f(1), a.f(2))); break;
-        case ShaderOp::color_to_float: {
-            const glm::vec3 c = a.v(0);
-            a.set(0, 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z);
-            break;
-        }
+        case ShaderOp::color_to_float: a.set(0, cycles_luminance(a.v(0))); break;
         case ShaderOp::vector_to_float: {
             const glm::vec3 v = a.v(0);
             a.set(0, (v.x + v.y + v.z) * (1.0f / 3.0f));
