@@ -13,6 +13,7 @@
 
 #include "photonsplat/errors.h"
 #include "photonsplat/material_program.h"
+#include "photonsplat/render.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
@@ -311,4 +312,34 @@ TEST(ShaderProgram, ProgrammedEmissionIsSeenAndSampledPerTriangle) {
     scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
     expect_vec_near(emission_at(scene, hit_at(scene, 0.3f, -0.4f), glm::vec3(0, 0, 1)), glm::vec3(0.8f, 0.1f, 0.0f),
                     1e-5f);
+}
+
+TEST(ShaderProgram, RenderedEmissionShowsWindowCoordinatesAndCameraDepth) {
+    // A plane filling an orthographic view, emitting (window x, window y, view z depth): the frame must show
+    // each pixel's centre in [0, 1]² (window coordinates, y up) and the distance to the camera (4).
+    Scene scene;
+    ProgramWriter w;
+    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, false, false, false, true, false});
+    const auto cam = w.op(ShaderOp::camera_data, {}, {}, {false, true, false});
+    const auto sep = w.op(ShaderOp::combine_xyz, {}, {tc[5], tc[5] + 1, cam[1]});
+    w.output(ProgramTarget::emission, 0, sep[0]);
+    Material m = diffuse_closures("window");
+    m.closures[0].color = glm::vec3(0.0f);
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::scale(glm::mat4(1.0f), glm::vec3(4.0f)));
+    glm::mat4 projection = glm::ortho(-1.0f, 1.0f, -0.5f, 0.5f, 0.1f, 10.0f);
+    const Camera camera(glm::dmat4(test::look_at_matrix({0, 0, 4}, {0, 0, 0}, {0, 1, 0})), projection, 8, 4);
+    RenderSettings settings;
+    settings.photons = 1000;
+    RenderControl control;
+    const RenderResult r = render(scene, camera, settings, control);
+    const std::vector<float>& rgba = r.rgba();
+    for (int y = 0; y < 4; ++y)
+        for (int px = 0; px < 8; ++px) {
+            const float* p = &rgba[4 * (static_cast<size_t>(y) * 8 + px)];
+            EXPECT_NEAR(p[0], (px + 0.5f) / 8.0f, 1e-4f);
+            EXPECT_NEAR(p[1], 1.0f - (y + 0.5f) / 4.0f, 1e-4f);
+            EXPECT_NEAR(p[2], 4.0f, 1e-4f);
+        }
 }
