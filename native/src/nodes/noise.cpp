@@ -5,6 +5,15 @@
 #include <cmath>
 #include <cstring>
 
+// Multiply-adds stay unfused here (the one fused step is written as std::fma): Cycles' values depend on where
+// its compiler fused, and at high noise detail a single ulp shows, so ours must not depend on our compiler's
+// choice. Clang fuses when it folds constants even for targets without FMA; GCC fuses on FMA targets.
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
 namespace ps {
 namespace noise {
 
@@ -13,6 +22,8 @@ int32_t float_to_int(float f) {
     if (f >= -2147483648.0f && f < 2147483648.0f) return static_cast<int32_t>(f);
     return INT32_MIN;
 }
+
+float mix(float a, float b, float t) { return a + t * (b - a); }
 
 float clamp(float a, float lo, float hi) {
     const float m = a > lo ? a : lo;

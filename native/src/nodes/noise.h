@@ -23,9 +23,8 @@ namespace noise {
 int32_t float_to_int(float f);
 // Cycles' min(max(a, lo), hi) with its (a > b ? a : b) comparisons: a NaN `a` gives `lo`.
 float clamp(float a, float lo, float hi);
-// Cycles' mix: a + t (b − a).
-inline float mix(float a, float b, float t) { return a + t * (b - a); }
-// Cycles' smoothstep(0, 1, x)-style helpers live where they are used (voronoi in texture_nodes.cpp).
+// Cycles' mix: a + t (b − a), never fused (noise.cpp says why; so not inline here).
+float mix(float a, float b, float t);
 
 // --- hashes (util/hash.h) -----------------------------------------------------------------------------------------
 

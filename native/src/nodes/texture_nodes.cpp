@@ -15,6 +15,15 @@
 #include "nodes/noise.h"
 #include "shader/op_args.h"
 
+// Multiply-adds stay unfused here (the one fused step is written as std::fma): Cycles' values depend on where
+// its compiler fused, and at high noise detail a single ulp shows, so ours must not depend on our compiler's
+// choice. Clang fuses when it folds constants even for targets without FMA; GCC fuses on FMA targets.
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
 namespace ps {
 namespace {
 
