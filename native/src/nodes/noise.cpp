@@ -5,9 +5,13 @@
 #include <cmath>
 #include <cstring>
 
-// Multiply-adds stay unfused here (the one fused step is written as std::fma): Cycles' values depend on where
-// its compiler fused, and at high noise detail a single ulp shows, so ours must not depend on our compiler's
-// choice. Clang fuses when it folds constants even for targets without FMA; GCC fuses on FMA targets.
+// Rounding. The goldens are Blender 3.4's x86 AVX2 Cycles kernel, and at high detail the finest octaves sample
+// the lattice at 2^15 times the coordinate, where one ulp anywhere upstream shows (up to 5e-3 in Fac). So this
+// file does that kernel's arithmetic, not merely its formulas: the multiply-adds it fuses (its SIMD madd() is an
+// FMA on AVX2, and its compiler contracts some scalar steps) are written as std::fma, its interpolation order is
+// kept, and nothing else may be fused. Our compiler must not fuse on its own (clang does when it folds constants,
+// even for targets without FMA; GCC on FMA targets): hence the pragmas. Each fused step below was chosen because
+// it brings the renders' values closer (test_texture_nodes.cpp measures it).
 #if defined(__clang__)
 #pragma STDC FP_CONTRACT OFF
 #elif defined(__GNUC__)
@@ -160,8 +164,12 @@ glm::vec3 hash_vec4_to_color(const glm::vec4& k) {
 
 namespace {
 
-// Perlin's quintic fade: C2 across lattice cells.
-float fade(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
+// Perlin's quintic fade 6t^5 - 15t^4 + 10t^3 (C2 across lattice cells), in Cycles' two roundings: its scalar 1D
+// code (the polynomial contracted by its compiler) and its SIMD 2-4D code (madd() twice, then (t t)(t b)).
+float fade_scalar(float t) { return t * t * t * std::fma(t, std::fma(t, 6.0f, -15.0f), 10.0f); }
+float fade_simd(float t) { return (t * t) * (t * std::fma(t, std::fma(t, 6.0f, -15.0f), 10.0f)); }
+// Cycles' SIMD mix(): madd(t, b, (1 - t) a).
+float mix_simd(float a, float b, float t) { return std::fma(t, b, (1.0f - t) * a); }
 
 float negate_if(float v, uint32_t condition) { return condition ? -v : v; }
 
@@ -212,8 +220,8 @@ uint32_t hash_cell(const uint32_t* k, int n) {
     }
 }
 
-// Gradient noise in N dimensions: the gradients of the cell's 2^N corners, blended with the faded fractions,
-// along x first, then y, z, w (Cycles' order).
+// Gradient noise in N dimensions: the gradients of the cell's 2^N corners (corner index bit d: the upper side
+// along axis d), blended with the faded fractions.
 template <int N>
 float perlin_n(const float* p) {
     uint32_t cell[N];
@@ -223,7 +231,7 @@ float perlin_n(const float* p) {
         // Unsigned so that cell + 1 wraps (int overflow would be undefined) as Cycles' int arithmetic does.
         cell[d] = static_cast<uint32_t>(float_to_int(fl));
         frac[d] = p[d] - fl;
-        t[d] = fade(frac[d]);
+        t[d] = N == 1 ? fade_scalar(frac[d]) : fade_simd(frac[d]);
     }
     float corner[1 << N];
     for (int c = 0; c < (1 << N); ++c) {
@@ -236,9 +244,17 @@ float perlin_n(const float* p) {
         }
         corner[c] = grad(hash_cell(k, N), q, N);
     }
-    // Corner index bit d is axis d: pairs (2i, 2i + 1) differ along the lowest remaining axis.
-    for (int d = 0; d < N; ++d)
-        for (int i = 0; i < (1 << (N - 1 - d)); ++i) corner[i] = mix(corner[2 * i], corner[2 * i + 1], t[d]);
+    if (N == 1) return mix(corner[0], corner[1], t[0]);
+    // Cycles' SIMD order: 2D and 3D along x, then y, then z; 4D (AVX) along w first, then x, y, z.
+    int n = 1 << N;
+    if (N == 4) {
+        n /= 2;
+        for (int i = 0; i < n; ++i) corner[i] = mix_simd(corner[i], corner[i + n], t[3]);
+    }
+    for (int d = 0; d < 3 && n > 1; ++d) {
+        n /= 2;
+        for (int i = 0; i < n; ++i) corner[i] = mix_simd(corner[2 * i], corner[2 * i + 1], t[d]);
+    }
     return corner[0];
 }
 
@@ -283,7 +299,7 @@ float fractal_noise_t(const P& p, float detail, float roughness) {
     const float gain = clamp(roughness, 0.0f, 1.0f);
     const int n = float_to_int(octaves);
     for (int i = 0; i <= n; ++i) {
-        sum += unoise(fscale * p) * amp;
+        sum = std::fma(unoise(fscale * p), amp, sum);  // contracted in Cycles' build
         maxamp += amp;
         amp *= gain;
         fscale *= 2.0f;
@@ -329,8 +345,7 @@ glm::vec4 random_vec4_offset(float seed) {
 // The seeds each dimension uses: its distortion takes the first `dims` (one per axis; 1D uses seed 0 through
 // random_float_offset), the colour's two channels the next two.
 NoiseTextureResult noise_texture(float p, float detail, float roughness, float distortion, bool want_color) {
-    // Fused as Cycles' x86 kernel (compiled with FMA contraction) fuses this scalar step: with high detail, one
-    // ulp of p moves the finest octaves' lattice samples, which Blender's renders show up to 2e-3 apart.
+    // contracted in Cycles' build (unfused, its renders and ours differ by up to 2e-3 at detail 15)
     if (distortion != 0.0f) p = std::fma(snoise(p + random_float_offset(0.0f)), distortion, p);
     NoiseTextureResult r;
     r.value = fractal_noise(p, detail, roughness);

@@ -1,8 +1,9 @@
 // The noise primitives of Blender 3.4's Cycles (kernel/svm/noise.h, fractal_noise.h, noisetex.h and util/hash.h),
 // reimplemented so that the procedural textures (texture_nodes.cpp) give Cycles' values: the same integer hash
 // (Bob Jenkins' lookup3, as Cycles seeds it), the same Perlin gradients and lattice, the same output scales, the
-// same fractal sums. Bit-for-bit agreement is not the aim (Cycles' x86 kernels interpolate with SSE/AVX and may
-// fuse multiply-adds); agreement to float rounding is.
+// same fractal sums, and as far as it shows, the same rounding as the x86 AVX2 kernel Blender 3.4 runs
+// (noise.cpp says why that matters at high detail). Cycles 3.4 has no coordinate wrapping for precision (later
+// versions added it): far from the origin the lattice coarsens exactly as it does in 3.4.
 //
 // Non-finite and huge coordinates: Cycles converts the lattice cell with a truncating float→int conversion,
 // which on x86 gives INT_MIN for NaN and anything beyond int's range. float_to_int reproduces that without the
