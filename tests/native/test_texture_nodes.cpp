@@ -11,8 +11,8 @@
 // Tolerances (absolute, scaled by max(1, |value|)): 1e-4 for the deterministic ops (Voronoi, White Noise, Magic,
 // Brick, Checker, Gradient), 1e-3 for those built on Perlin noise (Noise, Musgrave, Wave), where at detail 15 one
 // ulp of rounding upstream moves the finest octave. noise.cpp follows the AVX2 kernel's rounding closely enough
-// that the errors measured are far below both (the test prints each op's largest: about 1e-5 for Noise, 6e-6 for
-// Wave, under 1e-6 for the rest).
+// that the errors measured are far below both (the test prints each op's largest: about 1e-5 for Noise, under
+// 2e-6 for the rest).
 //
 // Besides the goldens: modes out of range give zeros, ops not ours are refused, and non-finite or huge inputs
 // neither crash nor hang.

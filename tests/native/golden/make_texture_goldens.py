@@ -294,6 +294,26 @@ def make_cases():
     add("musgrave 3d fbm far", "musgrave_texture", [3, 1], {"musgrave_dimensions": "3D", "musgrave_type": "FBM"},
         {"Scale": 1.0, "Detail": 2.0, "Dimension": 2.0, "Lacunarity": 2.0, "Offset": 0.0, "Gain": 1.0}, ["Fac"],
         rng=3000.0)
+    # Inputs beyond their ranges, clamped as Cycles clamps them (and a Minkowski exponent below 1).
+    add("noise 3d clamped", "noise_texture", [3], {"noise_dimensions": "3D"},
+        {"Scale": 2.0, "Detail": -1.0, "Roughness": 1.7, "Distortion": 0.0}, ["Fac", "Color"])
+    add("noise 2d rough clamped", "noise_texture", [2], {"noise_dimensions": "2D"},
+        {"Scale": 2.0, "Detail": 4.5, "Roughness": -0.5, "Distortion": 0.0}, ["Fac", "Color"])
+    add("musgrave 3d fbm clamped", "musgrave_texture", [3, 1], {"musgrave_dimensions": "3D", "musgrave_type": "FBM"},
+        {"Scale": 1.5, "Detail": 16.0, "Dimension": -1.0, "Lacunarity": 0.5, "Offset": 0.0, "Gain": 1.0}, ["Fac"])
+    add("voronoi 3d smooth_f1 clamped", "voronoi_texture", [3, 2, 0],
+        {"voronoi_dimensions": "3D", "feature": "SMOOTH_F1", "distance": "EUCLIDEAN"},
+        {"Scale": 1.8, "Smoothness": 3.0, "Exponent": 0.5, "Randomness": 1.5}, ["Distance", "Color", "Position"])
+    add("voronoi 2d f2 minkowski half", "voronoi_texture", [2, 1, 3],
+        {"voronoi_dimensions": "2D", "feature": "F2", "distance": "MINKOWSKI"},
+        {"Scale": 2.2, "Smoothness": 1.0, "Exponent": 0.5, "Randomness": 0.7}, ["Distance", "Color", "Position"])
+    add("voronoi 4d f1 randomness0", "voronoi_texture", [4, 0, 0],
+        {"voronoi_dimensions": "4D", "feature": "F1", "distance": "EUCLIDEAN"},
+        {"Scale": 1.3, "Smoothness": 1.0, "Exponent": 0.5, "Randomness": 0.0}, ["Distance", "Color", "Position", "W"])
+    add("wave rings spherical saw detail clamped", "wave_texture", [1, 0, 3, 1],
+        {"wave_type": "RINGS", "rings_direction": "SPHERICAL", "wave_profile": "SAW"},
+        {"Scale": 0.9, "Distortion": -3.0, "Detail": 20.0, "Detail Scale": 2.5, "Detail Roughness": 1.4,
+         "Phase Offset": -2.0}, ["Color", "Fac"])
     add("checker integers", "checker_texture", [], {}, dict(checker_colors, Scale=1.0), ["Color", "Fac"],
         integers=True)
     return cases
