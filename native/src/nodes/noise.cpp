@@ -1,7 +1,6 @@
 // Cycles 3.4's noise primitives (noise.h says what and why).
 #include "nodes/noise.h"
 
-#include <climits>
 #include <cmath>
 #include <cstring>
 
@@ -21,18 +20,7 @@
 namespace ps {
 namespace noise {
 
-int32_t float_to_int(float f) {
-    // The range test is written so that NaN fails it too.
-    if (f >= -2147483648.0f && f < 2147483648.0f) return static_cast<int32_t>(f);
-    return INT32_MIN;
-}
-
 float mix(float a, float b, float t) { return a + t * (b - a); }
-
-float clamp(float a, float lo, float hi) {
-    const float m = a > lo ? a : lo;
-    return m < hi ? m : hi;
-}
 
 // --- hashes ------------------------------------------------------------------------------------------------------
 
@@ -40,7 +28,8 @@ namespace {
 
 constexpr uint32_t rotl(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
 
-// lookup3's mix() and final(), on the three-word state.
+// lookup3's mix() and final(), on the three-word state, laid out as in lookup3.c.
+// clang-format off
 void lookup3_mix(uint32_t& a, uint32_t& b, uint32_t& c) {
     a -= c; a ^= rotl(c, 4);  c += b;
     b -= a; b ^= rotl(a, 6);  a += c;
@@ -59,6 +48,7 @@ void lookup3_final(uint32_t& a, uint32_t& b, uint32_t& c) {
     b ^= a; b -= rotl(a, 14);
     c ^= b; c -= rotl(b, 24);
 }
+// clang-format on
 
 // lookup3's initial value for a key of `words` 32-bit words and seed 13, as Cycles seeds it.
 constexpr uint32_t lookup3_seed(uint32_t words) { return 0xdeadbeefu + (words << 2) + 13u; }

@@ -21,9 +21,16 @@ namespace noise {
 // --- float helpers with Cycles' semantics -------------------------------------------------------------------------
 
 // (int)f as x86's cvttss2si does it: truncation toward zero; NaN and values outside int's range give INT_MIN.
-int32_t float_to_int(float f);
+inline int32_t float_to_int(float f) {
+    // written so that NaN fails the range test too
+    if (f >= -2147483648.0f && f < 2147483648.0f) return static_cast<int32_t>(f);
+    return INT32_MIN;
+}
 // Cycles' min(max(a, lo), hi) with its (a > b ? a : b) comparisons: a NaN `a` gives `lo`.
-float clamp(float a, float lo, float hi);
+inline float clamp(float a, float lo, float hi) {
+    const float m = a > lo ? a : lo;
+    return m < hi ? m : hi;
+}
 // Cycles' mix: a + t (b − a), never fused (noise.cpp says why; so not inline here).
 float mix(float a, float b, float t);
 
