@@ -316,6 +316,8 @@ def convert_material(material):
         return _finish(name, shader, notes)
 
     notes = _Notes(sp.op_table())
+    if notes.program is not None:
+        notes.program.material_index = int(getattr(material, "pass_index", 0))
     try:
         shader = _convert_socket(output.inputs["Surface"], (), notes)
         _check_displacement(output, notes)

@@ -165,6 +165,7 @@ class ProgramBuilder:
         self.uses_texspace = False   # Generated coordinates: the mesh's texture space
         self.uses_object_info = False
         self.bump = 0                # the shading point offset of the ops emitted now (Bump's height)
+        self.material_index = 0      # the material's pass index (Object Info's Material Index)
         self._memo = {}
         self._constants = {}
         self._depth = 0
@@ -646,8 +647,10 @@ def _n_geometry(b, node, stack):
 
 def _n_object_info(b, node, stack):
     b.uses_object_info = True
-    regs = b.emit("object_info", [], [])
-    return _outs(["Location", "Color", "Alpha", "Object Index", "Material Index", "Random"], regs)
+    results = _outs(["Location", "Color", "Alpha", "Object Index", "Material Index", "Random"],
+                    b.emit("object_info", [], []))
+    results["Material Index"] = float(b.material_index)    # the op's is 0: the material's pass index is known here
+    return results
 
 
 _LIGHT_PATH = ["Is Camera Ray", "Is Shadow Ray", "Is Diffuse Ray", "Is Glossy Ray", "Is Singular Ray",
@@ -690,17 +693,22 @@ def _n_image_texture(b, node, stack):
     reference, color = textures.texture_reference(node, b.notes, program=True)
     if reference is None:
         return {"Color": color, "Alpha": 1.0}
-    image = node.image
-    alpha_linked = _socket(node.outputs, "Alpha").is_linked
-    # Cycles keeps straight-alpha colour images premultiplied: without the Alpha output linked, the colour it
-    # outputs is colour x alpha; premultiplied, channel-packed and ignored alpha, and data, give the stored colour.
-    premultiply = (getattr(image, "alpha_mode", "STRAIGHT") == "STRAIGHT" and not alpha_linked
-                   and image.colorspace_settings.name not in _DATA_SPACES)
     vector = _vector_input(b, node, stack, default="uv")
     params = [TextureParam(reference), _INTERPOLATION.get(node.interpolation, 0),
-              _EXTENSION.get(node.extension, 0), _PROJECTION.get(node.projection, 0), int(premultiply)]
+              _EXTENSION.get(node.extension, 0), _PROJECTION.get(node.projection, 0), _alpha_mode(node)]
     regs = b.emit("image_texture", params, [vector, float(getattr(node, "projection_blend", 0.0))])
     return _outs(["Color", "Alpha"], regs)
+
+
+def _alpha_mode(node):
+    """The image op's alpha param as Cycles' ImageTextureNode decides it: channel-packed or ignored alpha, and data
+    images, give the stored colour (2); otherwise Cycles holds the image associated and unassociates it only when
+    the Alpha output is linked (0, the straight colour), else the colour is the associated colour x alpha (1)."""
+    image = node.image
+    if (getattr(image, "alpha_mode", "STRAIGHT") in ("CHANNEL_PACKED", "NONE")
+            or image.colorspace_settings.name in _DATA_SPACES):
+        return 2
+    return 0 if _socket(node.outputs, "Alpha").is_linked else 1
 
 
 def _n_environment_texture(b, node, stack):
