@@ -616,3 +616,61 @@ def test_a_program_renders_two_colours(empty_scene, core):
     rgb = np.asarray(image)[..., :3]
     left, right = rgb[:, :14].reshape(-1, 3).mean(axis=0), rgb[:, 18:].reshape(-1, 3).mean(axis=0)
     assert left[0] > 4.0 * left[2] and right[2] > 4.0 * right[0], (left, right)
+
+
+@pytest.mark.skipif(compat.PRINCIPLED_V2, reason="Principled BSDF v1 is Blender 3.x's")
+def test_an_image_in_principled_formulas_is_compiled(empty_scene, op_table):
+    mat = bpy.data.materials.new("Tinted")
+    enable_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    principled = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    principled.inputs["Metallic"].default_value = 0.5
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(principled.outputs[0], output.inputs["Surface"])
+    image = tree.nodes.new("ShaderNodeTexImage")
+    image.image = bpy.data.images.new("Base", 4, 4)
+    tree.links.new(image.outputs["Color"], principled.inputs["Base Color"])
+    spec, program, code = program_of(mat, op_table)
+    assert "image_texture" in names(code) and not spec.textures
+    assert not any("not applied" in n for n in spec.notes), spec.notes
+    # Metallic 0: a plain closure texture, as before programs.
+    principled.inputs["Metallic"].default_value = 0.0
+    spec = materials.convert_material(mat)
+    assert spec.textures and not spec.uses_program
+
+
+# --- Blender 4.x and 5.x nodes --------------------------------------------------------------------------------
+
+def _roughness_from(tree, shader, node, output):
+    tree.links.new(_output(node, output), shader.inputs["Roughness"])
+
+
+@pytest.mark.skipif(bpy.app.version < (4, 1, 0), reason="Noise's fractal types came with Blender 4.1")
+def test_noise_fractal_types_of_4x(empty_scene, op_table):
+    mat, tree, shader = diffuse_material()
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    _roughness_from(tree, shader, noise, "Fac")
+    spec, program, code = program_of(mat, op_table)
+    assert "noise_texture" in names(code) and spec.notes == []     # normalized fBM, lacunarity 2: 3.4's Noise
+    noise.noise_type = 'RIDGED_MULTIFRACTAL'
+    spec, program, code = program_of(mat, op_table)
+    (params,) = [c[1] for c in code if c[0] == "musgrave_texture"]
+    assert params == [3, 3] and any("Noise Texture" in n for n in spec.notes)
+
+
+@pytest.mark.skipif(bpy.app.version < (4, 0, 0), reason="Blender 4.x's operations")
+def test_operations_of_4x_are_approximated_with_a_note(empty_scene, op_table):
+    mat, tree, shader = diffuse_material()
+    modulo = tree.nodes.new("ShaderNodeMath")
+    modulo.operation = 'FLOORED_MODULO'
+    tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Pointiness"], modulo.inputs[0])
+    _roughness_from(tree, shader, modulo, "Value")
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = 'RGBA'
+    mix.blend_type = 'EXCLUSION'
+    tree.links.new(modulo.outputs[0], next(s for s in mix.inputs if s.identifier == "Factor_Float"))
+    tree.links.new(_output(mix, "Result_Color"), shader.inputs["Color"])
+    spec, program, code = program_of(mat, op_table)
+    assert any("Floored Modulo" in n for n in spec.notes) and any("exclusion" in n for n in spec.notes)
+    assert {"math", "mix_color"} <= set(names(code))

@@ -502,6 +502,13 @@ def _principled_v1(node, stack, notes):
     transmission_roughness = sp.clamp01(b, inputs.number("Transmission Roughness"))
     rotation = inputs.number("Anisotropic Rotation")
     distribution = getattr(node, "distribution", "GGX")
+    if texture is not None and b is not None and (
+            positive(subsurface, WEIGHT_CUTOFF) or positive(specular_tint, 0.0)
+            or (positive(sheen, WEIGHT_CUTOFF) and positive(sheen_tint, 0.0))
+            or (is_reg(metallic) or 0.0 < metallic < 1.0)):
+        # The image enters the formulas (a blend, a hue, a partly metallic colour): compiled into the program
+        # rather than multiplying closures as a closure texture.
+        base, texture = inputs.color("Base Color"), None
 
     diffuse_weight = sp.mul(b, sp.one_minus(b, metallic), sp.one_minus(b, transmission))
     final_transmission = sp.mul(b, transmission, sp.one_minus(b, metallic))
