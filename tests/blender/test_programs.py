@@ -674,3 +674,14 @@ def test_operations_of_4x_are_approximated_with_a_note(empty_scene, op_table):
     spec, program, code = program_of(mat, op_table)
     assert any("Floored Modulo" in n for n in spec.notes) and any("exclusion" in n for n in spec.notes)
     assert {"math", "mix_color"} <= set(names(code))
+
+
+def test_object_info_random_is_cycles(empty_scene):
+    """Object Info's Random as Blender 3.4's Cycles renders it (values read from Cycles renders of an emission of
+    Random): an object's from its name's hash, an instance's from the depsgraph's random_id."""
+    from photonsplat.export import instancing
+    bpy.ops.mesh.primitive_plane_add()
+    plane = bpy.context.active_object
+    plane.name = "Plané Ünïcode"
+    (instance,) = [i for i in bpy.context.evaluated_depsgraph_get().object_instances if i.object.type == 'MESH']
+    assert instancing.object_info(instance)["random"] == pytest.approx(0.5442667007446289, abs=1e-7)

@@ -46,11 +46,54 @@ def placement(instance, name=None):
 
 def object_info(instance):
     """What Cycles' Object Info node reads of a depsgraph instance: the object's colour and pass index, and its
-    random number, Cycles' random_id / 0xFFFFFFFF in float (scene/object.cpp) of the instance's random_id."""
+    random number. Cycles 3.4 (blender/object.cpp) takes the depsgraph instance's random_id for an instance and
+    hash_uint2(hash_string(object name), 0) for an object itself; the kernel's value is random_id / 0xFFFFFFFF in
+    float (scene/object.cpp)."""
     ob = instance.object
-    random_id = int(getattr(instance, "random_id", 0)) & 0xFFFFFFFF
-    random = float(np.float32(random_id) * np.float32(1.0 / 0xFFFFFFFF))
+    if instance.is_instance:
+        random_id = int(getattr(instance, "random_id", 0)) & _MASK
+    else:
+        random_id = _hash_uint2(_hash_string(ob.name), 0)
+    random = float(np.float32(random_id) * (np.float32(1.0) / np.float32(0xFFFFFFFF)))
     return {"color": tuple(float(c) for c in ob.color), "pass_index": int(ob.pass_index), "random": random}
+
+
+_MASK = 0xFFFFFFFF
+
+
+def _hash_string(text):
+    """Cycles' hash_string (util/hash.h): i = i * 37 + c over the UTF-8 bytes (unsigned, as Blender 3.4's Cycles
+    renders a non-ASCII name)."""
+    i = 0
+    for byte in text.encode("utf-8"):
+        i = (i * 37 + byte) & _MASK
+    return i
+
+
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & _MASK
+
+
+def _hash_uint2(kx, ky):
+    """Cycles' hash_uint2: Bob Jenkins' lookup3 final mix of two words."""
+    a = b = c = (0xDEADBEEF + (2 << 2) + 13) & _MASK
+    b = (b + ky) & _MASK
+    a = (a + kx) & _MASK
+    c ^= b
+    c = (c - _rot(b, 14)) & _MASK
+    a ^= c
+    a = (a - _rot(c, 11)) & _MASK
+    b ^= a
+    b = (b - _rot(a, 25)) & _MASK
+    c ^= b
+    c = (c - _rot(b, 16)) & _MASK
+    a ^= c
+    a = (a - _rot(c, 4)) & _MASK
+    b ^= a
+    b = (b - _rot(a, 14)) & _MASK
+    c ^= b
+    c = (c - _rot(b, 24)) & _MASK
+    return c
 
 
 def mesh_key(ob):
