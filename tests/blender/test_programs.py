@@ -683,5 +683,7 @@ def test_object_info_random_is_cycles(empty_scene):
     bpy.ops.mesh.primitive_plane_add()
     plane = bpy.context.active_object
     plane.name = "Plané Ünïcode"
-    (instance,) = [i for i in bpy.context.evaluated_depsgraph_get().object_instances if i.object.type == 'MESH']
-    assert instancing.object_info(instance)["random"] == pytest.approx(0.5442667007446289, abs=1e-7)
+    # A depsgraph instance is valid only during its own iteration step.
+    (random,) = [instancing.object_info(i)["random"] for i in bpy.context.evaluated_depsgraph_get().object_instances
+                 if i.object.type == 'MESH']
+    assert random == pytest.approx(0.5442667007446289, abs=1e-7)
