@@ -406,7 +406,9 @@ def _finish(name, shader, notes):
     if not closures:
         # Nothing reflects: a black surface (Cycles renders an unconnected Surface black).
         closures = [Closure("diffuse", BLACK, label="black")]
-    return MaterialSpec(name=name, closures=closures, factors=factors, emission=emission, notes=list(notes),
+    # (A Bump node compiles its height three times: a note from there comes once.)
+    return MaterialSpec(name=name, closures=closures, factors=factors, emission=emission,
+                        notes=list(dict.fromkeys(notes)),
                         holdout=holdout, summary=shader.summary or "black", program=b,
                         normal=None if holdout else getattr(notes, "normal", None))
 
