@@ -531,8 +531,9 @@ def _export(core_class):
     return export.export_frame(core_class, bpy.context.evaluated_depsgraph_get())
 
 
-def test_only_the_attributes_programs_read_are_exported(empty_scene):
-    from test_export import RecordingCore, add_camera
+def _attribute_recording_core():
+    """test_export's RecordingCore with the core's attribute_id."""
+    from test_export import RecordingCore
 
     class Core(RecordingCore):
         class Scene(RecordingCore.Scene):
@@ -544,7 +545,20 @@ def test_only_the_attributes_programs_read_are_exported(empty_scene):
                 if name not in self.attribute_names:
                     self.attribute_names.append(name)
                 return self.attribute_names.index(name)
+    return Core
 
+
+def _paint_material(name="Painted"):
+    mat, tree, shader = diffuse_material(name)
+    attribute = tree.nodes.new("ShaderNodeAttribute")
+    attribute.attribute_name = "Paint"
+    tree.links.new(attribute.outputs["Color"], shader.inputs["Color"])
+    return mat, tree, shader
+
+
+def test_only_the_attributes_programs_read_are_exported(empty_scene):
+    from test_export import add_camera
+    Core = _attribute_recording_core()
     add_camera(empty_scene)
     bpy.ops.mesh.primitive_plane_add(size=2.0)
     plane = bpy.context.active_object
@@ -687,3 +701,25 @@ def test_object_info_random_is_cycles(empty_scene):
     (random,) = [instancing.object_info(i)["random"] for i in bpy.context.evaluated_depsgraph_get().object_instances
                  if i.object.type == 'MESH']
     assert random == pytest.approx(0.5442667007446289, abs=1e-7)
+
+
+def test_viewport_reads_a_mesh_again_when_its_materials_need_an_attribute(empty_scene):
+    from test_viewport import DepsgraphUpdates
+    Core = _attribute_recording_core()
+    bpy.ops.mesh.primitive_plane_add()
+    plane = bpy.context.active_object
+    plane.data.color_attributes.new("Paint", 'FLOAT_COLOR', 'CORNER')
+    plain, tree, shader = diffuse_material("Plain")
+    plane.data.materials.append(plain)
+    sync = export.BlenderSync(Core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    assert not sync.scene.mesh_data[0].get("attributes")
+    with DepsgraphUpdates(sync) as updates:
+        attribute = tree.nodes.new("ShaderNodeAttribute")
+        attribute.attribute_name = "Paint"
+        tree.links.new(attribute.outputs["Color"], shader.inputs["Color"])
+        reports = updates.evaluate()
+    assert any(r.rebuilt for r in reports)
+    (exported,) = sync.scene.mesh_data
+    paint = exported["attributes"][sync.scene.attribute_names.index("Paint")]
+    assert paint.shape == (2, 3, 4)                      # per triangle corner
