@@ -236,6 +236,34 @@ def test_each_node_compiles_to_its_op(empty_scene, op_table, idname, output, op)
     assert [o["target"] for o in program["outputs"]] == ["closure_roughness"]
 
 
+@pytest.mark.parametrize("idname, output, op", NODES, ids=[n[0] for n in NODES])
+def test_the_core_accepts_each_program(empty_scene, op_table, core, idname, output, op):
+    """The core validates what the compiler emits (counts, ranges, texture and attribute ids, outputs)."""
+    if not core_has_programs():
+        pytest.skip("the core has no node programs yet (photonsplat._core.shader_ops missing)")
+    mat, tree, shader = diffuse_material(idname)
+    try:
+        node = tree.nodes.new(idname)
+    except RuntimeError:
+        pytest.skip(f"{idname} is not a node of Blender {bpy.app.version_string}")
+    if idname in ("ShaderNodeTexImage", "ShaderNodeTexEnvironment"):
+        node.image = bpy.data.images.new("Tex", 4, 4)
+    if idname == "ShaderNodeAttribute":
+        node.attribute_name = "Col"
+    if idname == "ShaderNodeTexCoord":
+        node.object = bpy.data.objects.new("Empty", None)
+    value = _output(node, output)
+    tree.links.new(value, shader.inputs["Color" if value.type != "VALUE" else "Roughness"])
+    spec = materials.convert_material(mat)
+    scene = core.Scene()
+    texture = scene.add_texture(name="Tex", pixels=np.ones((4, 4, 4), dtype=np.float32), color_space="linear")
+    arguments = spec.core_arguments(texture_index=lambda reference: texture, attribute_id=scene.attribute_id)
+    # Separating or combining constants folds: no program at all.
+    folded = {"ShaderNodeSeparateColor", "ShaderNodeCombineColor", "ShaderNodeSeparateXYZ", "ShaderNodeCombineXYZ"}
+    assert ("program" in arguments) != (idname in folded)
+    scene.add_material(**arguments)
+
+
 def test_node_params_follow_cycles_enums(empty_scene, op_table):
     mat, tree, shader = diffuse_material()
     power = tree.nodes.new("ShaderNodeMath")
@@ -723,3 +751,57 @@ def test_viewport_reads_a_mesh_again_when_its_materials_need_an_attribute(empty_
     (exported,) = sync.scene.mesh_data
     paint = exported["attributes"][sync.scene.attribute_names.index("Paint")]
     assert paint.shape == (2, 3, 4)                      # per triangle corner
+
+
+def test_a_material_of_every_program_output_renders(empty_scene, core):
+    """Principled with a programmed base colour, roughness and bump, a glass of programmed IOR, an emission: the
+    core takes every program output and renders a finite image."""
+    if not core_has_programs():
+        pytest.skip("the core has no node programs yet (photonsplat._core.shader_ops missing)")
+    from test_export import add_camera
+    from blender_helpers import uniform_world
+    add_camera(empty_scene, location=(0.0, 0.0, 3.0))
+    empty_scene.camera.rotation_euler = (0.0, 0.0, 0.0)
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    plane = bpy.context.active_object
+    mat = bpy.data.materials.new("Everything")
+    enable_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    add = tree.nodes.new("ShaderNodeAddShader")
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    principled = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    glass = tree.nodes.new("ShaderNodeBsdfGlass")
+    emission = tree.nodes.new("ShaderNodeEmission")
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    bump = tree.nodes.new("ShaderNodeBump")
+    ior = tree.nodes.new("ShaderNodeMath")
+    links = tree.links
+    links.new(coords.outputs["Object"], noise.inputs["Vector"])
+    links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
+    links.new(ramp.outputs["Color"], principled.inputs[compat.principled_input("base_color")])
+    links.new(noise.outputs["Fac"], principled.inputs[compat.principled_input("roughness")])
+    links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    links.new(bump.outputs["Normal"], principled.inputs["Normal"])
+    links.new(noise.outputs["Fac"], ior.inputs[1])
+    ior.inputs[0].default_value = 1.2
+    links.new(ior.outputs[0], glass.inputs["IOR"])
+    links.new(noise.outputs["Color"], emission.inputs["Color"])
+    links.new(noise.outputs["Fac"], mix.inputs["Fac"])
+    links.new(principled.outputs[0], mix.inputs[1])
+    links.new(glass.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], add.inputs[0])
+    links.new(emission.outputs[0], add.inputs[1])
+    links.new(add.outputs[0], output.inputs["Surface"])
+    plane.data.materials.append(mat)
+    uniform_world(empty_scene)
+    empty_scene.render.resolution_x = empty_scene.render.resolution_y = 16
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    spec = materials.convert_material(mat)
+    targets = {o["target"] for o in spec.core_arguments()["program"]["outputs"]}
+    assert {"closure_color", "closure_alpha_x", "closure_ior", "emission", "normal"} <= targets
+    image, _ = core.render(frame.scene, frame.camera, frame.settings)
+    assert np.isfinite(np.asarray(image)).all() and np.asarray(image)[..., :3].max() > 0.0
