@@ -629,6 +629,8 @@ def _principled_v2(node, stack, notes):
             notes.append("Coat Tint applied at normal incidence only")
         below_tint = sp.lerp(b, WHITE, tint, coat)
         notes.append("coat layering approximated (layers below dimmed by the coat's normal reflectance)")
+        if "Coat Normal" in node.inputs and node.inputs["Coat Normal"].is_linked:
+            notes.append("coat normal map ignored (the Normal input's used)")
     else:
         below_tint = WHITE
 
