@@ -15,8 +15,9 @@ weights and parameters (closures.h lists the kinds the core renders):
   Glass                reflection + refraction split by a Fresnel factor of its IOR
   Refraction           refraction only
   Translucent, Transparent, Velvet, Emission, Holdout   their closures (holdout: the whole material)
-  Mix, Add Shader      the two lists, weighted by a constant Fac, or by a view-dependent factor when Fac comes
-                       from a Fresnel or Layer Weight node (evaluated by the core at each hit)
+  Mix, Add Shader      the two lists, weighted by Fac (a constant or a program value), or by a view-dependent
+                       factor when Fac comes from a Fresnel or Layer Weight node of constant IOR / Blend
+                       (evaluated by the core for each direction)
   node groups          followed inside, and back out through their Group Input sockets
 
 Microfacet closures with Blender roughness <= ROUGHNESS_SHARP are exported as distribution "sharp" (a perfect
@@ -31,8 +32,8 @@ scaling its closures' weights, Glass's Fresnel split) folds constants and emits 
 closure ends up with becomes a program output (closure_color, closure_specular_color, closure_roughness,
 closure_alpha_x, closure_alpha_y, closure_ior; emission; normal). A material whose inputs are all constant has no
 program and comes out as before programs. A microfacet closure whose roughness is programmed stays a GGX or Beckmann
-lobe (never 'sharp'). One shading normal per material: the first Normal input driven by nodes (Bump, Normal Map...);
-a closure with another one keeps it, with a note. A Mix Shader's Fac from a Fresnel or Layer Weight node of constant
+lobe (never 'sharp'). One shading normal per material: the first Normal input driven by nodes (Bump, Normal Map...)
+is every closure's, with a note when another closure's Normal input names another. A Mix Shader's Fac from a Fresnel or Layer Weight node of constant
 IOR/Blend stays a view-dependent factor of the closures (MixFactor, evaluated by the core for each direction).
 
 Without node programs in the core (an older _core without shader_ops()), driven inputs take the socket's unconnected
