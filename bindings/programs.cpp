@@ -10,6 +10,7 @@
 #include "arrays.h"
 #include "bindings.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/material_program.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shader_program.h"
 
@@ -84,6 +85,15 @@ void bind_programs(py::module_& m) {
         },
         "The shader program ops (native/include/photonsplat/shader_program.h): a list of dicts with name, id, "
         "params (count), inputs and outputs (type strings: 'f' float, 'v' vector of three registers).");
+    m.def(
+        "program_timing",
+        [](bool reset) {
+            const ps::ProgramTiming t = ps::program_timing(reset);
+            return py::dict("runs"_a = t.runs, "seconds"_a = t.seconds);
+        },
+        "reset"_a = true,
+        "Runs of material programs and their time summed over threads since the last reset; measured only when "
+        "the process started with PHOTONSPLAT_PROGRAM_TIMING set (tools/benchmark.py --program-timing).");
     auto scene = py::reinterpret_borrow<py::class_<ps::Scene>>(m.attr("Scene"));
     scene
         .def("attribute_id", &ps::Scene::attribute_id, "name"_a,

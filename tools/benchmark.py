@@ -43,6 +43,9 @@ def parse_args():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", help="write every record here")
     parser.add_argument("--markdown", help="write the tables here")
+    parser.add_argument("--program-timing", action="store_true",
+                        help="time the materials' node programs (needs PHOTONSPLAT_PROGRAM_TIMING=1 in the "
+                             "environment when Blender starts): each record gets their runs and summed seconds")
     args = parser.parse_args(argv)
     args.resolution = args.resolution or ["1920x1080"]
     return args
@@ -104,7 +107,13 @@ def measure(args):
                     repeats = args.brute_repeats if method == "brute" else args.repeats
                     print(f"benchmark: {width}x{height} frame {frame_number} {photons} photons {method} "
                           f"x{repeats}", flush=True)
-                    runs = [render_once(frame, settings) for _ in range(repeats)]
+                    runs = []
+                    for _ in range(repeats):
+                        core.program_timing(True)
+                        runs.append(render_once(frame, settings))
+                        timing = core.program_timing(True)
+                        runs[-1][1]["seconds"]["programs (summed over threads)"] = timing["seconds"]
+                        runs[-1][1]["counters"]["program_runs"] = timing["runs"]
                     image, last = runs[-1]
                     record = {
                         "resolution": [width, height], "frame": frame_number, "photons": photons,

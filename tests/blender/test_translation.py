@@ -116,8 +116,9 @@ def test_nodes_behind_inputs_are_compiled_and_unsupported_ones_noted(empty_scene
     render_pixels(tmp_path / "noted.exr")
     warnings = engine.last_outcome.warnings
     print("\n" + "\n".join(warnings))
-    assert not any(w.startswith("Material 'Noisy'") for w in warnings)
-    assert not any(w.startswith("Material 'Mapped'") for w in warnings)
+    # (Blender 4.x's Principled BSDF has a note of its own: only the nodes matter here.)
+    assert not any(w.startswith("Material 'Noisy'") and "Noise" in w for w in warnings)
+    assert not any(w.startswith("Material 'Mapped'") and ("Mapping" in w or "coordinates" in w) for w in warnings)
     assert any(w.startswith("Material 'Occluded'") and "Ambient Occlusion" in w for w in warnings)
 
 

@@ -3,6 +3,8 @@
 // (scattering.h) and the emission reads of every stage go through here; a material without a program never
 // does.
 #pragma once
+#include <cstdint>
+
 #include <glm/vec3.hpp>
 
 #include "photonsplat/closures.h"
@@ -33,6 +35,15 @@ glm::vec3 emission_at(const Scene& scene, const SurfacePoint& s, const glm::vec3
 
 // The shading normal a program's Bump / Normal Map makes at s (s.smooth_normal where it makes none).
 glm::vec3 program_normal(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo);
+
+// What the programs cost, for the benchmark (tools/benchmark.py --program-timing): with the environment variable
+// PHOTONSPLAT_PROGRAM_TIMING set when the process starts, every run_material_program is timed (two clock reads,
+// tens of nanoseconds, counted in the figure); otherwise nothing is measured and this returns zeros.
+struct ProgramTiming {
+    uint64_t runs = 0;
+    double seconds = 0.0;  // summed over threads
+};
+ProgramTiming program_timing(bool reset);
 
 // A point on a triangle as a surface seen from the front (for sampling an emissive triangle's program).
 SurfacePoint surface_on_triangle(const Scene& scene, uint32_t instance, uint32_t triangle, float u, float v);

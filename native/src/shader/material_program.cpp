@@ -1,6 +1,9 @@
 #include "photonsplat/material_program.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <vector>
 
@@ -113,7 +116,37 @@ ShaderGlobals shader_globals(const Scene& scene, const SurfacePoint& s, const gl
     return g;
 }
 
+namespace {
+
+const bool kTimePrograms = std::getenv("PHOTONSPLAT_PROGRAM_TIMING") != nullptr;
+std::atomic<uint64_t> g_program_runs{0}, g_program_nanoseconds{0};
+
+void run_and_apply(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo, ProgrammedMaterial& out);
+
+}  // namespace
+
+ProgramTiming program_timing(bool reset) {
+    ProgramTiming t;
+    t.runs = reset ? g_program_runs.exchange(0) : g_program_runs.load();
+    t.seconds = 1e-9 * double(reset ? g_program_nanoseconds.exchange(0) : g_program_nanoseconds.load());
+    return t;
+}
+
 void run_material_program(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo, ProgrammedMaterial& out) {
+    if (!kTimePrograms) {
+        run_and_apply(scene, s, wo, out);
+        return;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    run_and_apply(scene, s, wo, out);
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start);
+    g_program_runs.fetch_add(1, std::memory_order_relaxed);
+    g_program_nanoseconds.fetch_add(static_cast<uint64_t>(ns.count()), std::memory_order_relaxed);
+}
+
+namespace {
+
+void run_and_apply(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo, ProgrammedMaterial& out) {
     const Material& m = *s.material;
     out.closure_count = static_cast<int>(std::min<size_t>(m.closures.size(), kMaxClosures));
     for (int i = 0; i < out.closure_count; ++i) out.closures[i] = m.closures[static_cast<size_t>(i)];
@@ -154,6 +187,8 @@ void run_material_program(const Scene& scene, const SurfacePoint& s, const glm::
         }
     }
 }
+
+}  // namespace
 
 glm::vec3 emission_at(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo) {
     const Material& m = *s.material;
