@@ -11,7 +11,8 @@ one frame and photon count uses the same seed, so all methods splat the same pho
 
 Times are medians over --repeats runs (--brute-repeats for brute, the slow oracle); counters and bytes come from
 the last run (they do not change between runs with the same seed). Radii are the engine's automatic ones: the
-scene's size scaled by 1/sqrt(photons). This is a benchmark, not a test: the machines are shared and noisy, so
+scene's size scaled by 1/sqrt(photons). With PHOTONSPLAT_PROGRAM_TIMING=1 in the environment the materials' node
+programs are timed too (seconds "programs (summed over threads)", counter "program_runs"; zero otherwise). This is a benchmark, not a test: the machines are shared and noisy, so
 compare ratios measured in the same run.
 """
 import argparse
@@ -43,9 +44,6 @@ def parse_args():
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", help="write every record here")
     parser.add_argument("--markdown", help="write the tables here")
-    parser.add_argument("--program-timing", action="store_true",
-                        help="time the materials' node programs (needs PHOTONSPLAT_PROGRAM_TIMING=1 in the "
-                             "environment when Blender starts): each record gets their runs and summed seconds")
     args = parser.parse_args(argv)
     args.resolution = args.resolution or ["1920x1080"]
     return args
