@@ -113,13 +113,14 @@ uint32_t visibility_bits(bool camera, bool shadow, bool indirect) {
 }
 
 // A (H, W, C) float image -> Texture; rows in Blender's order (row 0 at the bottom).
-ps::Texture texture_from_array(const std::string& name, const py::object& pixels_obj, const std::string& color_space) {
+ps::Texture texture_from_array(const std::string& name, const py::object& pixels_obj, const std::string& color_space,
+                               bool premultiplied) {
     const std::string where = "texture '" + name + "'";
     auto pixels = float_array(pixels_obj, where + ".pixels");
     if (pixels.ndim() != 3)
         throw ps::InvalidInput(where + ".pixels", "must be (H, W, C) with C = 1, 3 or 4, got " + shape_of(pixels));
     return ps::Texture(name, pixels.data(), static_cast<int>(pixels.shape(1)), static_cast<int>(pixels.shape(0)),
-                       static_cast<int>(pixels.shape(2)), ps::color_space_from_string(color_space));
+                       static_cast<int>(pixels.shape(2)), ps::color_space_from_string(color_space), premultiplied);
 }
 
 }  // namespace
@@ -199,7 +200,9 @@ void bind_translation(py::module_& m) {
         .def(
             "add_texture",
             [](ps::Scene& s, const std::string& name, const py::object& path, const py::object& pixels,
-               const std::string& color_space) {
+               const std::string& color_space, const std::string& alpha) {
+                if (alpha != "straight" && alpha != "premultiplied")
+                    throw ps::InvalidInput("texture '" + name + "'.alpha", "must be 'straight' or 'premultiplied'");
                 const ps::ColorSpace space = ps::color_space_from_string(color_space);
                 if (path.is_none() == pixels.is_none())
                     throw ps::InvalidInput("texture '" + name + "'", "give exactly one of path and pixels");
@@ -208,12 +211,13 @@ void bind_translation(py::module_& m) {
                     py::gil_scoped_release release;
                     return s.add_texture(ps::load_texture(name, file, space, "texture '" + name + "'.path"));
                 }
-                return s.add_texture(texture_from_array(name, pixels, color_space));
+                return s.add_texture(texture_from_array(name, pixels, color_space, alpha == "premultiplied"));
             },
-            "name"_a, "path"_a = py::none(), "pixels"_a = py::none(), "color_space"_a = "sRGB",
+            "name"_a, "path"_a = py::none(), "pixels"_a = py::none(), "color_space"_a = "sRGB", "alpha"_a = "straight",
             "Adds an image texture from a file (read with OpenImageIO; not where IMAGE_FILES is False) or from "
-            "pixels (H,W,C) with row 0 at the bottom (Blender's Image.pixels); color_space 'sRGB' (decoded) or "
-            "'linear'. Returns its index for add_material(texture=...).")
+            "pixels (H,W,C) with row 0 at the bottom (Blender's Image.pixels); color_space 'sRGB' (decoded after "
+            "interpolation, as Cycles does for 8-bit images) or 'linear'; alpha of pixels: 'straight' or "
+            "'premultiplied' (Blender's float buffers); files say which themselves. Returns its index for add_material(texture=...).")
         .def(
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,

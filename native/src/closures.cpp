@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 #include "photonsplat/brdf.h"
 #include "photonsplat/errors.h"
@@ -835,6 +836,49 @@ float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3
         default: break;
     }
     return std::isfinite(w) ? std::max(w, 0.0f) : 0.0f;
+}
+
+glm::vec3 ensure_valid_reflection(const glm::vec3& ng, const glm::vec3& i, const glm::vec3& n) {
+    const glm::vec3 r = 2.0f * glm::dot(n, i) * n - i;
+    // A reflection may be as shallow as the incoming ray, never shallower than that (or than 0.01).
+    const float threshold = std::min(0.9f * glm::dot(ng, i), 0.01f);
+    if (glm::dot(ng, r) >= threshold) return n;
+    // In the frame (x, ng) with n in its plane, the tilted n' = (sqrt(1 − z²), z) solves
+    // 2 (n'·i) n'_z − i_z = threshold: a quadratic in z², of two roots.
+    const float n_dot_ng = glm::dot(n, ng);
+    const glm::vec3 along = n - n_dot_ng * ng;
+    const float along_len = glm::length(along);
+    if (!(along_len > 0.0f)) return ng;
+    const glm::vec3 x = along / along_len;
+    const float ix = glm::dot(i, x), iz = glm::dot(i, ng);
+    const float ix2 = ix * ix, iz2 = iz * iz;
+    const float a = ix2 + iz2;
+    if (!(a > 0.0f)) return ng;
+    const float b = std::sqrt(std::max(ix2 * (a - threshold * threshold), 0.0f));
+    const float c = iz * threshold + a;
+    const float z2_1 = 0.5f / a * (b + c), z2_2 = 0.5f / a * (-b + c);
+    bool valid1 = z2_1 > 1e-5f && z2_1 <= 1.0f + 1e-5f;
+    bool valid2 = z2_2 > 1e-5f && z2_2 <= 1.0f + 1e-5f;
+    const auto planar = [](float z2) {
+        return glm::vec2(std::sqrt(std::max(1.0f - z2, 0.0f)), std::sqrt(std::max(z2, 0.0f)));
+    };
+    glm::vec2 chosen;
+    if (valid1 && valid2) {
+        const glm::vec2 n1 = planar(z2_1), n2 = planar(z2_2);
+        const float r1 = 2.0f * (n1.x * ix + n1.y * iz) * n1.y - iz;
+        const float r2 = 2.0f * (n2.x * ix + n2.y * iz) * n2.y - iz;
+        valid1 = r1 >= 1e-5f;
+        valid2 = r2 >= 1e-5f;
+        if (valid1 && valid2)
+            chosen = r1 < r2 ? n1 : n2;  // the shallower reflection is the nearer to n
+        else
+            chosen = r1 > r2 ? n1 : n2;
+    } else if (valid1 || valid2) {
+        chosen = planar(valid1 ? z2_1 : z2_2);
+    } else {
+        return ng;
+    }
+    return chosen.x * x + chosen.y * ng;
 }
 
 }  // namespace ps

@@ -26,8 +26,9 @@ ColorSpace color_space_from_string(const std::string& name) {
     throw InvalidInput("texture.color_space", "must be 'sRGB' or 'linear', got '" + name + "'");
 }
 
-Texture::Texture(std::string name, const float* pixels, int width, int height, int channels, ColorSpace space)
-    : name_(std::move(name)), width_(width), height_(height) {
+Texture::Texture(std::string name, const float* pixels, int width, int height, int channels, ColorSpace space,
+                 bool premultiplied)
+    : name_(std::move(name)), width_(width), height_(height), space_(space) {
     const std::string where = "texture '" + name_ + "'";
     if (width < 1 || height < 1 || width > kMaxTextureSide || height > kMaxTextureSide)
         throw InvalidInput(where + ".pixels", "size must be 1 to 65536 per side, got " + std::to_string(width) +
@@ -42,11 +43,10 @@ Texture::Texture(std::string name, const float* pixels, int width, int height, i
         glm::vec4 c(p[0], p[0], p[0], 1.0f);
         if (channels == 2) c.w = p[1];
         if (channels >= 3) c = glm::vec4(p[0], p[1], p[2], channels == 4 ? p[3] : 1.0f);
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < 4; ++k)
             if (!std::isfinite(c[k]))
                 throw InvalidInput(where + ".pixels", "texel " + std::to_string(i) + " is NaN or infinite");
-            if (k < 3 && space == ColorSpace::srgb) c[k] = srgb_to_linear(std::max(c[k], 0.0f));
-        }
+        if (premultiplied && c.w > 0.0f && c.w != 1.0f) c = glm::vec4(glm::vec3(c) / c.w, c.w);
         texels_[i] = c;
     }
 }
@@ -131,8 +131,10 @@ glm::vec4 Texture::sample(float u, float v, TextureInterpolation interpolation, 
                 for (int i = 0; i < 4; ++i) r += wx[i] * wy[j] * texel(x0 - 1 + i, y0 - 1 + j, extension, alpha);
         }
     }
-    // Cycles unassociates only where alpha is strictly between 0 and 1.
+    // Cycles unassociates only where alpha is strictly between 0 and 1, then decodes what it kept encoded.
     if (alpha == TextureAlpha::unassociated && r.w != 1.0f && r.w != 0.0f) r = glm::vec4(glm::vec3(r) / r.w, r.w);
+    if (space_ == ColorSpace::srgb)
+        for (int k = 0; k < 3; ++k) r[k] = srgb_to_linear(std::max(r[k], 0.0f));
     return r;
 }
 

@@ -343,3 +343,35 @@ TEST(ShaderProgram, RenderedEmissionShowsWindowCoordinatesAndCameraDepth) {
             EXPECT_NEAR(p[2], 4.0f, 1e-4f);
         }
 }
+
+TEST(ShaderProgram, SrgbImagesInterpolateEncodedAndPremultipliedOnesAreUnassociated) {
+    // Cycles keeps 8-bit sRGB images encoded and decodes after interpolating: halfway between black and white is
+    // the decoded 0.5 (0.214), not 0.5.
+    const float bw[6] = {0, 0, 0, 1, 1, 1};
+    const Texture srgb("bw", bw, 2, 1, 3, ColorSpace::srgb);
+    EXPECT_NEAR(srgb.sample(0.5f, 0.5f, TextureInterpolation::linear, TextureExtension::extend,
+                            TextureAlpha::unassociated).x, 0.21404114f, 1e-6f);
+    EXPECT_NEAR(srgb.lookup({0.5f, 0.5f}).x, 0.21404114f, 1e-6f);
+    // A premultiplied texel (Blender's float buffers): associated output as given, unassociated divided.
+    const float premultiplied[4] = {0.25f, 0.25f, 0.25f, 0.5f};
+    const Texture p("p", premultiplied, 1, 1, 4, ColorSpace::linear, true);
+    EXPECT_NEAR(p.sample(0.5f, 0.5f, TextureInterpolation::linear, TextureExtension::repeat, TextureAlpha::associated).x,
+                0.25f, 1e-6f);
+    EXPECT_NEAR(p.sample(0.5f, 0.5f, TextureInterpolation::linear, TextureExtension::repeat, TextureAlpha::unassociated).x,
+                0.5f, 1e-6f);
+}
+
+TEST(ShaderProgram, BumpedNormalsKeepReflectionsAboveTheSurface) {
+    // Cycles' ensure_valid_reflection: a normal tilted so far that the view's mirror direction would go under the
+    // surface is tilted back just enough; a normal that reflects fine is left alone.
+    const glm::vec3 ng(0, 0, 1);
+    const glm::vec3 i = glm::normalize(glm::vec3(1, 0, 0.2f));  // a grazing view from +x
+    EXPECT_EQ(ensure_valid_reflection(ng, i, ng), ng);
+    const glm::vec3 n = glm::normalize(glm::vec3(-0.8f, 0.0f, 0.6f));  // leaning away from the viewer: R goes down
+    ASSERT_LT(glm::dot(ng, 2.0f * glm::dot(n, i) * n - i), 0.0f);
+    const glm::vec3 fixed = ensure_valid_reflection(ng, i, n);
+    EXPECT_NEAR(glm::length(fixed), 1.0f, 1e-5f);
+    const float threshold = std::min(0.9f * glm::dot(ng, i), 0.01f);
+    EXPECT_NEAR(glm::dot(ng, 2.0f * glm::dot(fixed, i) * fixed - i), threshold, 1e-4f);
+    EXPECT_NEAR(fixed.y, 0.0f, 1e-6f);  // turned in the plane of n and ng only
+}

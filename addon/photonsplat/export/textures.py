@@ -98,5 +98,7 @@ def add_texture(core_scene, reference):
         raise ValueError("the image has no pixels")
     pixels = np.empty(count, dtype=np.float32)
     image.pixels.foreach_get(pixels)
+    # Blender keeps float buffers associated with alpha (premultiplied), byte buffers straight.
     return core_scene.add_texture(name=image.name, pixels=pixels.reshape(height, width, channels),
-                                  color_space=reference.color_space)
+                                  color_space=reference.color_space,
+                                  alpha="premultiplied" if image.is_float else "straight")

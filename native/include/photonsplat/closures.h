@@ -149,6 +149,12 @@ LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo
 // which lobe to sample, never in an estimate's value.
 float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo);
 
+// Cycles' ensure_valid_reflection (closure/bsdf_util.h): a shading normal n (unit) tilted towards the geometric
+// normal ng just enough that the mirror direction of i (unit, towards the viewer) leaves the surface at least as
+// steeply as min(0.9 ng·i, 0.01); ng where no such tilt exists. Cycles applies it to every bumped or
+// normal-mapped closure normal.
+glm::vec3 ensure_valid_reflection(const glm::vec3& ng, const glm::vec3& i, const glm::vec3& n);
+
 // The Fresnel colour of a sharp reflection closure at cos θ = n·wo (delta lobes have no lobe_eval).
 glm::vec3 sharp_reflection_fresnel(FresnelKind fresnel, const glm::vec3& specular_color, float ior, float cos_no);
 

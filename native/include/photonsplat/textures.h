@@ -1,5 +1,7 @@
-// Images for Image and Environment Texture nodes. Texels are stored as scene-linear RGBA with straight
-// (unassociated) alpha, unclamped: an sRGB-encoded image is decoded once on load, so lookups never convert.
+// Images for Image and Environment Texture nodes. Texels are stored as RGBA with straight (unassociated) alpha,
+// unclamped. A linear image is stored as it is; an sRGB-encoded one keeps its encoded values and is decoded after
+// interpolation, as Cycles does for the 8-bit images it keeps encoded (NODE_IMAGE_COMPRESS_AS_SRGB): a blend of
+// two texels is then the blend of their encoded values.
 // lookup() is the base-colour shortcut of a closure (Cycles' defaults: Linear, Repeat, clamped to a
 // reflectance); sample() is the node's full lookup (interpolation, extension, alpha association).
 #pragma once
@@ -21,7 +23,7 @@ enum class TextureExtension : uint8_t { repeat, extend, clip, mirror };
 enum class TextureAlpha : uint8_t { unassociated, associated, channel_packed };
 
 enum class ColorSpace {
-    srgb,    // 8-bit photos and paintings: decoded with the sRGB transfer curve
+    srgb,    // 8-bit photos and paintings: decoded with the sRGB transfer curve after interpolation
     linear,  // scene-linear data (EXR, HDR) and non-colour data: used as stored
 };
 ColorSpace color_space_from_string(const std::string& name);  // "sRGB" | "linear"; throws InvalidInput
@@ -31,8 +33,10 @@ constexpr int kMaxTextureSide = 65536;  // texels per side, at most
 class Texture {
 public:
     // `pixels`: height × width × channels floats (1 grey, 2 grey + alpha, 3 or 4 channels), row 0 at the BOTTOM
-    // of the image (Blender's Image.pixels order, where v = 0), straight alpha. Non-finite values are refused.
-    Texture(std::string name, const float* pixels, int width, int height, int channels, ColorSpace space);
+    // of the image (Blender's Image.pixels order, where v = 0). `premultiplied`: the colours are associated with
+    // alpha (Blender's float buffers, EXR files) and are unassociated on load. Non-finite values are refused.
+    Texture(std::string name, const float* pixels, int width, int height, int channels, ColorSpace space,
+            bool premultiplied = false);
 
     const std::string& name() const { return name_; }
     int width() const { return width_; }
@@ -51,7 +55,8 @@ public:
 private:
     std::string name_;
     int width_, height_;
-    std::vector<glm::vec4> texels_;  // row 0 = bottom (v = 0); straight alpha
+    std::vector<glm::vec4> texels_;  // row 0 = bottom (v = 0); straight alpha; sRGB-encoded if space_ is srgb
+    ColorSpace space_;
 
     glm::vec4 texel(int x, int y, TextureExtension extension, TextureAlpha alpha) const;
 };

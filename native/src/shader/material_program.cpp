@@ -52,14 +52,13 @@ glm::vec3 finite_or(const glm::vec3& v, const glm::vec3& fallback) {
     return glm::vec3(finite_or(v.x, fallback.x), finite_or(v.y, fallback.y), finite_or(v.z, fallback.z));
 }
 
-// The normal a program made, on the geometric normal's side (flipped there when a Normal Map points inside).
-glm::vec3 facing_normal(glm::vec3 n, const SurfacePoint& s) {
+// The normal a program made, as Cycles gives it to the closures: tilted so that reflections of the view stay above
+// the surface (ensure_valid_reflection).
+glm::vec3 closure_normal(glm::vec3 n, const SurfacePoint& s, const glm::vec3& wo) {
     n = finite_or(n, glm::vec3(0.0f));
     const float len = glm::length(n);
     if (!(len > 0.0f)) return s.smooth_normal;
-    n /= len;
-    if (glm::dot(n, s.geometric_normal) < 0.0f) n = -n;
-    return n;
+    return ensure_valid_reflection(s.geometric_normal, wo, n / len);
 }
 
 }  // namespace
@@ -177,12 +176,12 @@ void run_and_apply(const Scene& scene, const SurfacePoint& s, const glm::vec3& w
             case ProgramTarget::closure_ior:
                 if (c) c->ior = std::max(finite_or(r.at(o.register_), 1.45f), 1e-3f);
                 break;
-            case ProgramTarget::emission:
-                out.emission = glm::max(finite_or(r.vec(o.register_), glm::vec3(0.0f)), glm::vec3(0.0f));
+            case ProgramTarget::emission:  // signed, as Cycles' (negative emission darkens what it is added to)
+                out.emission = finite_or(r.vec(o.register_), glm::vec3(0.0f));
                 break;
             case ProgramTarget::normal:
                 out.has_normal = true;
-                out.normal = facing_normal(r.vec(o.register_), s);
+                out.normal = closure_normal(r.vec(o.register_), s, wo);
                 break;
         }
     }

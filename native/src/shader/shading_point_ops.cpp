@@ -146,7 +146,8 @@ glm::vec3 bump(const ShaderGlobals& g, bool invert, const glm::vec3& normal_in, 
     glm::vec3 out = safe_normalize(std::fabs(det) * normal_in - scale * sign * surfgrad);
     if (out == glm::vec3(0.0f)) return normal_in;
     out = safe_normalize(strength * out + (1.0f - strength) * normal_in);
-    return out == glm::vec3(0.0f) ? normal_in : out;
+    if (out == glm::vec3(0.0f)) out = normal_in;
+    return ensure_valid_reflection(g.Ng, g.I, out);
 }
 
 glm::vec3 to_world(const ShaderGlobals& g, const ShaderCamera& cam, int type, int from, const glm::vec3& v) {

@@ -84,7 +84,10 @@ Texture load_texture(const std::string& name, const std::string& path, ColorSpac
     const size_t row = static_cast<size_t>(width) * channels;
     for (int y = 0; y < height / 2; ++y)
         std::swap_ranges(pixels.begin() + y * row, pixels.begin() + (y + 1) * row, pixels.begin() + (height - 1 - y) * row);
-    return Texture(name, pixels.data(), width, height, channels, space);
+    // OIIO hands straight colour where the file stores it (PNG, as asked above), associated where the file does
+    // (EXR, TIFF): it says which.
+    const bool premultiplied = (channels == 2 || channels == 4) && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0;
+    return Texture(name, pixels.data(), width, height, channels, space, premultiplied);
 }
 
 }  // namespace ps
