@@ -86,9 +86,9 @@ def run_in_blender(argv):
 
 # ---- inside Blender: shared with tests/blender/test_node_pixels.py -------------------------------------------
 
-def describe_case(material_name):
-    """What a case's Cycles image depends on, as JSON-able data: its node tree (every property), the objects,
-    meshes, images and camera of the scene, and the view settings."""
+def describe_tree(tree):
+    """A node tree as JSON-able data: every node's properties, colour ramp stops, curve points, image pixels
+    (hashed), node groups (recursively), input values and links."""
     import bpy
     import numpy as np
 
@@ -151,16 +151,26 @@ def describe_case(material_name):
                        for l in tree.links)
         return {"nodes": nodes, "links": links}
 
+    return tree_desc(tree)
+
+
+def describe_case(material_name):
+    """What a case's Cycles image depends on, as JSON-able data: its node tree (every property), the objects,
+    meshes, images and camera of the scene, and the view settings."""
+    import bpy
+    import numpy as np
+
     scene = bpy.context.scene
     bpy.context.view_layer.update()        # matrix_world of new objects is set by the depsgraph
-    desc = {"blender": bpy.app.version_string, "material": tree_desc(bpy.data.materials[material_name].node_tree),
+    desc = {"blender": bpy.app.version_string, "material": describe_tree(bpy.data.materials[material_name].node_tree),
             "resolution": [scene.render.resolution_x, scene.render.resolution_y,
                            scene.render.resolution_percentage],
             "view": [scene.view_settings.view_transform, scene.view_settings.look, scene.view_settings.exposure,
                      scene.view_settings.gamma], "objects": {}}
     for obj in scene.objects:
         entry = {"type": obj.type, "matrix": [round(v, 6) for row in obj.matrix_world for v in row],
-                 "hide_render": obj.hide_render, "pass_index": obj.pass_index, "color": value(obj.color)}
+                 "hide_render": obj.hide_render, "pass_index": obj.pass_index,
+                 "color": [round(c, 6) for c in obj.color]}
         if obj.type == 'MESH':
             mesh = obj.data
             co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
