@@ -736,7 +736,8 @@ def grid_mesh(name, dome):
 
 
 def new_scene(size):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
+    # read_homefile, not read_factory_settings: the latter resets the preferences and so disables the add-on
+    bpy.ops.wm.read_homefile(use_empty=True)
     scene = bpy.context.scene
     scene.render.engine = 'CYCLES'
     scene.render.resolution_x = scene.render.resolution_y = size

@@ -393,10 +393,38 @@ def blender_main(argv):
                "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}
     OUT_DIR.mkdir(parents=True, exist_ok=True)
     (OUT_DIR / "results.json").write_text(json.dumps(results, indent=1))
+    if core is not None:
+        write_failure_sheet([r["name"] for r in rows if not r.get("pass") and not r.get("error")],
+                            OUT_DIR / "failures.png")
     if args.only or args.match:
         print(f"node_compare: --only/--match: the markdown is left as it is (results in {OUT_DIR / 'results.json'})")
         return
     write_markdown(results, Path(args.markdown))
+
+
+def write_failure_sheet(names, path):
+    """Cycles | Photon Splat | 10 x |difference| for each failing case, four per row (display sRGB, clipped)."""
+    import numpy as np
+    sys.path.insert(0, str(REPO / "tools"))
+    from closure_gallery import display, write_png
+    if not names:
+        return
+    tiles = []
+    for name in names:
+        data = np.load(OUT_DIR / "images" / f"{name}.npz")
+        c, o = data["cycles"], data["ours"]
+        d = np.abs(o - c) * 10.0
+        gap = np.full((c.shape[0], 2, 3), 255, np.uint8)
+        tiles.append(np.concatenate([display(c), gap, display(o), gap, display(d)], axis=1))
+    blank = np.zeros_like(tiles[0])
+    while len(tiles) % 4:
+        tiles.append(blank)
+    rows = [np.concatenate(sum(([t, np.full((t.shape[0], 8, 3), 255, np.uint8)] for t in tiles[k:k + 4]), [])[:-1],
+                           axis=1) for k in range(0, len(tiles), 4)]
+    sheet = np.concatenate(sum(([r, np.full((6, r.shape[1], 3), 255, np.uint8)] for r in rows), [])[:-1], axis=0)
+    write_png(path, sheet)
+    (path.with_suffix(".txt")).write_text("\n".join(names) + "\n")
+    print(f"node_compare: wrote {path} (failing cases, in the order of {path.with_suffix('.txt')})")
 
 
 def commit_of_repo():
