@@ -19,10 +19,11 @@ alpha varying), "grid_byte" (12 x 8 byte, sRGB), "normals" (32 x 32 byte, Non-Co
 Each case is a material named after the case, with custom properties "ps_object" (Plane or Dome), "ps_class"
 ("deterministic" or "noise": acceptance (a) asks 1e-3 of the mean for the first, 1 % for the noise-based
 textures: noise, voronoi, musgrave, wave with distortion, magic, white noise) and "ps_node" (the node under test).
-CASES lists them in order. Values that would be negative are moved into [0, ...) by the case itself (an offset
-through a Math or Vector Math node) only where the node's own output is meant to be signed; edge cases (division by
-zero, logarithms of negatives, out-of-range inverse trigonometry) are kept as Cycles computes them (0 for the
-guarded ones).
+CASES lists them in order. Outputs that are signed are moved into [0, ...) after the node (a Math or Vector Math
+Multiply Add: `vscale` in the builders, SHIFTS for the cases found negative), since Photon Splat clamps emission at
+0 and Cycles does not; math_subtract_signed alone keeps negative values, to show that difference. Edge cases
+(division by zero, logarithms of negatives, out-of-range inverse trigonometry, min > max) are kept as Cycles
+computes them.
 
 Run as a script it writes build/node_compare/node_planes.blend (images packed) for a look at the cases:
     blender -b --factory-startup --python blend_scenes/make_node_planes.py [-- --size 64]
@@ -142,6 +143,15 @@ def simple(name, builder, cls=DET, obj="Plane", node=None):
     CASES.append((name, cls, obj, node or name.split("_")[0], builder))
 
 
+def w_input(t, dims):
+    """The W input of a 1D or 4D texture: 1D reads W alone, so it follows the object's x; 4D its y, slower."""
+    if dims == "1D":
+        return t.axis("Object", 0, 1.0, 0.3)
+    if dims == "4D":
+        return t.axis("Object", 1, 0.4, 0.61)
+    return 0.37
+
+
 # -- noise texture: each dimension, fac and colour, detail, roughness, distortion
 for dims, output, extra in [("1D", "Fac", {}), ("2D", "Color", {}), ("3D", "Fac", {}), ("3D", "Color", {}),
                             ("4D", "Color", {}), ("3D", "Fac", {"Detail": 0.0}),
@@ -151,7 +161,7 @@ for dims, output, extra in [("1D", "Fac", {}), ("2D", "Color", {}), ("3D", "Fac"
     label = "_".join([dims.lower(), output.lower()] + [f"{k.lower()}{v:g}" for k, v in extra.items()])
 
     def build(t, dims=dims, output=output, extra=extra):
-        inputs = {"Scale": 3.0, "Detail": 2.0, "Roughness": 0.5, "W": 0.37, **extra}
+        inputs = {"Scale": 3.0, "Detail": 2.0, "Roughness": 0.5, "W": w_input(t, dims), **extra}
         return t.new("ShaderNodeTexNoise", {"noise_dimensions": dims}, Vector=obj_coords(t, 1.0),
                      **inputs).outputs[output]
     simple(f"noise_{label}", build, NOISE)
@@ -176,7 +186,7 @@ for dims in ("1D", "2D", "3D", "4D"):
 for dims, feature, metric, output in VORONOI:
     def build(t, dims=dims, feature=feature, metric=metric, output=output):
         node = t.new("ShaderNodeTexVoronoi", {"voronoi_dimensions": dims, "feature": feature, "distance": metric},
-                     Vector=obj_coords(t, 1.0), W=0.61, Scale=3.0, Smoothness=0.6, Exponent=1.5, Randomness=0.85)
+                     Vector=obj_coords(t, 1.0), W=w_input(t, dims), Scale=3.0, Smoothness=0.6, Exponent=1.5, Randomness=0.85)
         out = node.outputs[output]
         if output == "Position":
             return t.vscale(out, 0.1, 0.5)
@@ -192,7 +202,7 @@ for dims, mtype in ([("3D", m) for m in ("MULTIFRACTAL", "RIDGED_MULTIFRACTAL", 
                     + [("4D", "HETERO_TERRAIN"), ("1D", "HYBRID_MULTIFRACTAL"), ("2D", "MULTIFRACTAL")]):
     def build(t, dims=dims, mtype=mtype):
         node = t.new("ShaderNodeTexMusgrave", {"musgrave_dimensions": dims, "musgrave_type": mtype},
-                     Vector=obj_coords(t, 1.0), W=0.23, Scale=2.5, Detail=3.5, Dimension=1.6, Lacunarity=2.3,
+                     Vector=obj_coords(t, 1.0), W=w_input(t, dims), Scale=2.5, Detail=3.5, Dimension=1.6, Lacunarity=2.3,
                      Offset=0.8, Gain=1.3)
         return t.new("ShaderNodeMath", {"operation": 'MULTIPLY_ADD'}, in0=node.outputs[0], in1=0.25,
                      in2=0.5).outputs[0]
@@ -228,8 +238,10 @@ for dims, output in (("1D", "Value"), ("2D", "Color"), ("3D", "Value"), ("3D", "
         # quantised coordinates: one random value per 0.25 m cell, so that the comparison does not hang on which
         # side of a float a pixel's coordinate falls
         snapped = t.new("ShaderNodeVectorMath", {"operation": 'SNAP'}, in0=t.coord("Object"), in1=(0.25,) * 3)
+        w = t.new("ShaderNodeMath", {"operation": 'SNAP'}, in0=t.axis("Object", 0, 1.0, 0.1), in1=0.25).outputs[0] \
+            if dims in ("1D", "4D") else 0.5
         return t.new("ShaderNodeTexWhiteNoise", {"noise_dimensions": dims}, Vector=snapped.outputs[0],
-                     W=0.5).outputs[output]
+                     W=w).outputs[output]
     simple(f"whitenoise_{dims.lower()}_{output.lower()}", build, NOISE, node="white_noise")
 
 # -- brick, checker, gradient
@@ -613,7 +625,8 @@ simple("vertexcolor_node", lambda t: t.new("ShaderNodeVertexColor", {"layer_name
 for ior in (1.45, 2.5):
     simple(f"fresnel_{ior:g}", lambda t, ior=ior: t.new("ShaderNodeFresnel", IOR=ior).outputs[0], obj="Dome")
 simple("fresnel_normal_input", lambda t: t.new("ShaderNodeFresnel", IOR=1.6, Normal=t.new(
-    "ShaderNodeVectorMath", {"operation": 'NORMALIZE'}, in0=t.mapped("Object", scale=(1.0, 1.0, 0.5))).outputs[0]
+    "ShaderNodeVectorMath", {"operation": 'NORMALIZE'}, in0=t.mapped("Object", location=(0.0, 0.0, 0.6),
+                                                                     scale=(1.0, 1.0, 0.0))).outputs[0]
     ).outputs[0], node="fresnel")
 for output in ("Fresnel", "Facing"):
     simple(f"layerweight_{output.lower()}", lambda t, output=output: t.new(
@@ -646,7 +659,16 @@ for space in ('TANGENT', 'OBJECT', 'WORLD'):
         t.link(tex.outputs["Color"], nm.inputs["Color"])
         return t.vscale(nm.outputs[0], 0.5, 0.5)
     simple(f"normalmap_{space.lower()}", build_nm, obj="Dome", node="normal_map")
-simple("normal_node_dot", lambda t: t.new("ShaderNodeNormal").outputs["Dot"], obj="Dome", node="normal")
+def normal_node(t):
+    node = t.new("ShaderNodeNormal")
+    node.outputs["Normal"].default_value = (0.3, 0.4, 0.866)       # the node's own direction
+    t.link(t.new("ShaderNodeNewGeometry").outputs["Normal"], node.inputs["Normal"])
+    return t.new("ShaderNodeCombineXYZ", X=node.outputs["Dot"], Y=0.5, Z=t.new(
+        "ShaderNodeVectorMath", {"operation": 'DOT_PRODUCT'}, in0=node.outputs["Normal"],
+        in1=(0.0, 0.0, 1.0)).outputs["Value"]).outputs[0]
+
+
+simple("normal_node_dot", normal_node, obj="Dome", node="normal")
 simple("fresnel_of_bumped_normal", lambda t: t.new("ShaderNodeFresnel", IOR=1.5, Normal=t.new(
     "ShaderNodeBump", Strength=1.0, Distance=0.2, Height=t.new("ShaderNodeTexWave", Scale=1.5,
                                                                 Vector=t.coord("Object")).outputs["Fac"]).outputs[0]
@@ -773,6 +795,30 @@ def new_scene(size):
     return scene
 
 
+# Cases whose values Cycles renders negative on part of the plane, shifted into [0, ...) after the node (scale,
+# offset): Photon Splat clamps a program's emission at 0 (materials.cpp), Cycles does not, and these cases are
+# about the node. math_subtract_signed alone keeps its negative values, to show that difference.
+SHIFTS = {
+    "maprange_linear": (1.0, 0.2), "maprange_stepped": (1.0, 0.2), "maprange_vector_linear": (1.0, 0.05),
+    "math_arcsine_out_of_range": (1.0, 1.6), "math_arctan2": (1.0, 3.2), "math_arctangent": (1.0, 1.6),
+    "math_ceil": (1.0, 2.0), "math_divide_by_zero": (1.0, 1.0), "math_floor": (1.0, 2.5),
+    "math_logarithm_through_zero": (0.1, 1.0), "math_modulo_negative": (1.0, 1.0), "math_sign": (1.0, 1.5),
+    "math_snap": (1.0, 2.0), "math_tangent": (1.0, 1.0), "math_tanh": (1.0, 1.0), "math_trunc": (1.0, 1.5),
+    "mix_rgba_linear_light": (1.0, 0.5), "mix_rgba_subtract": (1.0, 0.5), "vectorcurves": (1.0, 0.2),
+    "vmath_subtract": (1.0, 0.5), "vmath_wrap": (1.0, 0.3), "geometry_position": (0.85, 0.08),
+    "texcoord_object_from_camera": (0.35, 0.9),
+}
+
+
+def shifted(t, name, socket):
+    if name not in SHIFTS:
+        return socket
+    scale, offset = SHIFTS[name]
+    if socket.type == 'VALUE':
+        return t.new("ShaderNodeMath", {"operation": 'MULTIPLY_ADD'}, in0=socket, in1=scale, in2=offset).outputs[0]
+    return t.vscale(socket, scale, offset)
+
+
 def build(size=64, names=None):
     """A new scene with the cases' materials (all of CASES, or those named); returns [(name, class, object, node)]
     in order. Call use_case(name) to put one on its object and show that object alone."""
@@ -784,7 +830,7 @@ def build(size=64, names=None):
         mat = bpy.data.materials.new(name)
         mat.use_fake_user = True
         t = Tree(mat)
-        t.emit(builder(t))
+        t.emit(shifted(t, name, builder(t)))
         mat["ps_object"], mat["ps_class"], mat["ps_node"] = obj, cls, node
         chosen.append((name, cls, obj, node))
     if names is not None:
