@@ -675,6 +675,17 @@ simple("fresnel_of_bumped_normal", lambda t: t.new("ShaderNodeFresnel", IOR=1.5,
     ).outputs[0], obj="Dome", node="bump")
 
 
+# -- implicit conversions between socket types (Cycles' colour -> float is a luminance, vector -> float an average)
+simple("convert_color_to_float", lambda t: t.new("ShaderNodeMath", {"operation": 'MULTIPLY'}, in0=uv_color(t),
+                                                 in1=1.0).outputs[0], node="conversion")
+simple("convert_vector_to_float", lambda t: t.new("ShaderNodeMath", {"operation": 'MULTIPLY'},
+                                                  in0=t.mapped("Object", location=(0.5, 0.5, 0.5)),
+                                                  in1=1.0).outputs[0], node="conversion")
+simple("convert_float_to_vector", lambda t: t.new("ShaderNodeVectorMath", {"operation": 'MULTIPLY'},
+                                                  in0=t.axis("UV", 0), in1=(0.3, 0.6, 0.9)).outputs[0],
+       node="conversion")
+
+
 # -- a node group (inlined by the compiler)
 def group_case(t):
     group = bpy.data.node_groups.get("NP_Group")
