@@ -164,7 +164,7 @@ PYBIND11_MODULE(_core, m) {
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
                const py::object& emission, float roughness, int texture, bool holdout, const py::object& closures,
-               const py::object& factors) {
+               const py::object& factors, const py::object& program) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
@@ -178,14 +178,15 @@ PYBIND11_MODULE(_core, m) {
                 if (mat.kind == ps::MaterialKind::closures) {
                     mat.closures = closure_list(closures, where + ".closures");
                     mat.factors = factor_list(factors, where + ".factors");
-                } else if (!closures.is_none() || !factors.is_none()) {
-                    throw ps::InvalidInput(where + ".closures", "closures and factors need kind='closures'");
+                    mat.program = shader_program_from(program, where + ".program");
+                } else if (!closures.is_none() || !factors.is_none() || !program.is_none()) {
+                    throw ps::InvalidInput(where + ".closures", "closures, factors and program need kind='closures'");
                 }
                 return s.add_material(mat);
             },
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
             "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f, "texture"_a = -1, "holdout"_a = false,
-            "closures"_a = py::none(), "factors"_a = py::none(),
+            "closures"_a = py::none(), "factors"_a = py::none(), "program"_a = py::none(),
             "Adds a material; returns its index for material_ids. kind 'diffuse', 'mirror', 'glass' or 'glossy' is a "
             "simple material from color, ior, roughness (glossy only, Blender's, in [0, 1]: GGX with alpha = "
             "roughness^2; <= 0.05 is a mirror) and texture (index of add_texture() whose colour at the hit's UV "
@@ -195,7 +196,9 @@ PYBIND11_MODULE(_core, m) {
             "specular_color, roughness, alpha_x, alpha_y, ior, texture, texture_target ('color' or "
             "'specular_color'), factors_on and factors_off: indices into `factors`), and `factors`, a list of dicts "
             "(kind: fresnel, layer_fresnel, layer_facing; value: the IOR or Blend) whose value at each hit "
-            "multiplies a closure's weight (factors_on) or 1 - it (factors_off). emission: radiance W/(sr m^2) "
+            "multiplies a closure's weight (factors_on) or 1 - it (factors_off). program: a shader program dict "
+            "(shader_program.h; code, registers, tables, outputs with target, index, register) that sets closure "
+            "inputs, the emission and the normal at each hit. emission: radiance W/(sr m^2) "
             "from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
         .def(
             "add_point_light",
@@ -309,4 +312,5 @@ PYBIND11_MODULE(_core, m) {
     bind_translation(m);
     bind_progressive(m);
     bind_scene_updates(m);
+    bind_programs(m);
 }

@@ -23,7 +23,47 @@ namespace {
 struct MeshArrays {
     py::array_t<float, py::array::c_style> vertices, normals, uvs;
     py::array_t<int32_t, py::array::c_style> triangles, material_ids;
+    std::vector<py::array_t<float, py::array::c_style>> attributes;
 };
+
+// attributes={id: (N, k) or (M, 3, k) floats} (ids from Scene.attribute_id) and texspace=(location, size).
+void mesh_extras(ps::MeshInput& mesh, const py::object& attributes_obj, const py::object& texspace_obj,
+                 MeshArrays& arrays) {
+    const std::string where = "mesh '" + mesh.name + "'";
+    if (!attributes_obj.is_none()) {
+        if (!py::isinstance<py::dict>(attributes_obj))
+            throw ps::InvalidInput(where + ".attributes", "must be a dict {attribute id: array}");
+        const py::dict d = py::reinterpret_borrow<py::dict>(attributes_obj);
+        arrays.attributes.reserve(d.size());
+        for (const auto& [key, value] : d) {
+            ps::MeshInput::Attribute a;
+            const std::string field = where + ".attributes[" + std::string(py::str(key)) + "]";
+            try {
+                a.id = py::cast<uint32_t>(key);
+            } catch (const py::cast_error&) {
+                throw ps::InvalidInput(field, "keys must be attribute ids (Scene.attribute_id)");
+            }
+            arrays.attributes.push_back(float_array(py::reinterpret_borrow<py::object>(value), field));
+            const auto& held = arrays.attributes.back();
+            const auto m = static_cast<py::ssize_t>(mesh.triangle_count), n = static_cast<py::ssize_t>(mesh.vertex_count);
+            a.per_corner = held.ndim() == 3;
+            a.components = static_cast<int>(held.ndim() >= 2 ? held.shape(held.ndim() - 1) : 0);
+            if (a.components < 1 || a.components > 4 || (a.per_corner && (held.shape(0) != m || held.shape(1) != 3)) ||
+                (!a.per_corner && (held.ndim() != 2 || held.shape(0) != n)))
+                throw ps::InvalidInput(field, "must be (N, k) per vertex or (M, 3, k) per corner, k in 1..4, got " +
+                                                  shape_of(held));
+            a.data = held.data();
+            mesh.attributes.push_back(a);
+        }
+    }
+    if (!texspace_obj.is_none()) {
+        const auto t = float_array(texspace_obj, where + ".texspace");
+        require_shape(t, {2, 3}, where + ".texspace", "(location, size), (2, 3)");
+        mesh.has_texspace = true;
+        mesh.texspace_location = glm::vec3(t.at(0, 0), t.at(0, 1), t.at(0, 2));
+        mesh.texspace_size = glm::vec3(t.at(1, 0), t.at(1, 1), t.at(1, 2));
+    }
+}
 
 // An optional attribute of `columns` floats per vertex, (N, columns), or per triangle corner, (M, 3, columns):
 // nullptr for None, else its data, kept alive by `held`; `per_corner` is set to which of the two it is.
@@ -90,26 +130,48 @@ void bind_translation(py::module_& m) {
         .def(
             "add_mesh_data",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,
-               const py::object& normals, const py::object& uvs, const py::object& material_ids) {
+               const py::object& normals, const py::object& uvs, const py::object& material_ids,
+               const py::object& attributes, const py::object& texspace) {
                 MeshArrays arrays;
-                return s.add_mesh_data(mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays));
+                ps::MeshInput mesh = mesh_input(name, vertices, triangles, normals, uvs, material_ids, arrays);
+                mesh_extras(mesh, attributes, texspace, arrays);
+                return s.add_mesh_data(mesh);
             },
             "name"_a, "vertices"_a, "triangles"_a, "normals"_a = py::none(), "uvs"_a = py::none(),
-            "material_ids"_a = py::none(),
+            "material_ids"_a = py::none(), "attributes"_a = py::none(), "texspace"_a = py::none(),
             "Adds a mesh in object space without placing it: vertices (N,3), triangles (M,3), optional normals "
-            "(N,3) or (M,3,3), uvs (N,2) or (M,3,2), material_ids (M,). Returns the mesh id for add_instance.")
+            "(N,3) or (M,3,3), uvs (N,2) or (M,3,2), material_ids (M,), attributes {Scene.attribute_id(name): "
+            "(N,k) or (M,3,k)} for shader programs, texspace ((location), (size)): Blender's texture space for "
+            "Generated coordinates (default: the mesh's box). Returns the mesh id for add_instance.")
         .def(
             "add_instance",
             [](ps::Scene& s, uint32_t mesh, const py::object& transform, const std::string& name, bool camera,
-               bool shadow, bool indirect) {
-                return s.add_instance(mesh, dmat4(transform, "instance '" + name + "'.transform"), name,
-                                      visibility_bits(camera, shadow, indirect));
+               bool shadow, bool indirect, const py::object& object_info) {
+                const uint32_t id = s.add_instance(mesh, dmat4(transform, "instance '" + name + "'.transform"), name,
+                                                   visibility_bits(camera, shadow, indirect));
+                if (!object_info.is_none()) {
+                    const std::string where = "instance '" + name + "'.object_info";
+                    if (!py::isinstance<py::dict>(object_info))
+                        throw ps::InvalidInput(where, "must be a dict with color, pass_index, random");
+                    const py::dict d = py::reinterpret_borrow<py::dict>(object_info);
+                    glm::vec4 color(1.0f);
+                    if (d.contains("color")) {
+                        const auto c = float_array(d["color"], where + ".color");
+                        require_shape(c, {4}, where + ".color", "(r, g, b, a)");
+                        color = glm::vec4(c.at(0), c.at(1), c.at(2), c.at(3));
+                    }
+                    const float pass_index = d.contains("pass_index") ? py::cast<float>(d["pass_index"]) : 0.0f;
+                    const float random = d.contains("random") ? py::cast<float>(d["random"]) : 0.0f;
+                    s.set_instance_info(id, color, pass_index, random);
+                }
+                return id;
             },
             "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
-            "visible_indirect"_a = true,
+            "visible_indirect"_a = true, "object_info"_a = py::none(),
             "Places mesh mesh_id with a (4,4) row-major object-to-world transform (read in float64: a scene far "
             "from the origin keeps its precision); returns the instance id. "
-            "visible_*: which rays see it (camera rays, shadow rays, every other ray).")
+            "visible_*: which rays see it (camera rays, shadow rays, every other ray). object_info: {color (r,g,b,a), "
+            "pass_index, random} for Object Info nodes.")
         .def(
             "set_instance_transform",
             [](ps::Scene& s, uint32_t instance, const py::object& transform) {

@@ -48,6 +48,7 @@ Camera::Camera(const glm::dmat4& to_world_input, const glm::mat4& projection, in
     if (!position_ok || !is_finite(glm::vec3(to_world_[0])) ||
         !is_finite(glm::vec3(to_world_[1])) || !is_finite(glm::vec3(to_world_[2])))
         throw InvalidInput("camera.to_world", "position must be finite and within ±1e15, axes finite and non-zero");
+    projection_ = projection;
     inverse_projection_ = glm::inverse(projection);
     forward_ = -glm::vec3(to_world_[2]);
 
@@ -67,6 +68,24 @@ Camera::Camera(const glm::dmat4& to_world_input, const glm::mat4& projection, in
     if (!std::isfinite(far_) || far_ <= 0.0f) far_ = std::numeric_limits<float>::infinity();
     if (!std::isfinite(near_) || (!orthographic_ && near_ <= 0.0f))
         throw InvalidInput("camera.projection", "near clip distance must be positive, got " + std::to_string(near_));
+}
+
+ShaderCamera Camera::shader_camera() const {
+    glm::mat4 to_world = to_world_;
+    to_world[3] = glm::vec4(glm::vec3(world_position_), 1.0f);
+    const glm::mat4 world_to_view = glm::inverse(to_world);  // Blender's camera space: looking down −Z
+    ShaderCamera c;
+    glm::mat4 flip(1.0f);
+    flip[2][2] = -1.0f;  // Cycles' camera space looks down +Z
+    c.world_to_camera = flip * world_to_view;
+    glm::mat4 to_unit(0.5f);  // clip x, y in [−w, w] → [0, w]
+    to_unit[2][2] = 1.0f;
+    to_unit[3] = glm::vec4(0.5f, 0.5f, 0.0f, 1.0f);
+    c.world_to_ndc = to_unit * projection_ * world_to_view;
+    c.position = glm::vec3(world_position_);
+    c.orthographic = orthographic_;
+    c.pixel_spread = 2.0f * half_extent_y_ / static_cast<float>(height_);
+    return c;
 }
 
 Camera Camera::relative_to(const glm::dvec3& origin) const {

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "photonsplat/lights.h"
+#include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/ray_tracer.h"
@@ -90,8 +91,10 @@ glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, 
     for (int k = 0; k < kMaxCrossings; ++k) {
         Hit hit;
         if (!tracer.intersect(r, 0.0f, remaining, hit, kShadowRays)) return transmittance;
-        const SurfacePoint s = surface_at(scene, r, hit);
-        if (!s.material->transparent) return glm::vec3(0.0f);
+        if (!scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]].transparent)
+            return glm::vec3(0.0f);
+        SurfacePoint s = surface_at(scene, r, hit);
+        s.ray_kind = ShaderRay::shadow;
         const Bsdf b = shade(scene, s, -r.direction);
         transmittance *= glm::min(b.transparent, glm::vec3(1.0f));
         if (is_black(transmittance)) return glm::vec3(0.0f);
@@ -171,10 +174,15 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         if (found) {
             const Material& material =
                 scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]];
-            if (!is_black(material.emission) && !material.holdout) {
+            if ((!is_black(material.emission) || material.program_emission) && !material.holdout) {
                 const glm::vec3 y = ray.origin + hit.t * ray.direction;
                 const float p_light = sources.emissive_pdf(hit.instance, hit.triangle, x, y);
-                if (p_light > 0.0f) bsdf_sum += bs.weight * material.emission * power_heuristic(bs.pdf, p_light);
+                if (p_light > 0.0f) {
+                    const glm::vec3 emitted = material.program_emission
+                                                  ? emission_at(scene, surface_at(scene, ray, hit), -ray.direction)
+                                                  : material.emission;
+                    bsdf_sum += bs.weight * emitted * power_heuristic(bs.pdf, p_light);
+                }
             }
         } else {
             // The world: the lobes' part only (light sampling took Lambert's), f_lobes·cos / pdf.

@@ -1,5 +1,7 @@
 #include "photonsplat/light_sources.h"
 
+#include "photonsplat/material_program.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -33,12 +35,19 @@ LightSources::LightSources(const Scene& scene) : scene_(scene) {
     for (uint32_t i = 0; i < scene.instances().size(); ++i) {
         const MeshData& mesh = scene.meshes()[scene.instances()[i].mesh];
         for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
-            const glm::vec3 e = scene.materials()[mesh.materials[t]].emission;
+            const Material& material = scene.materials()[mesh.materials[t]];
+            // A program's emission is sampled as constant per triangle, its value at the centroid (what
+            // the camera and BSDF-sampled rays see is the program's at each point).
+            const glm::vec3 e = material.program_emission
+                                    ? emission_at(scene, surface_on_triangle(scene, i, t, 1.0f / 3.0f, 1.0f / 3.0f),
+                                                  glm::vec3(0.0f, 0.0f, 1.0f))
+                                    : material.emission;
             if (!(luminance(e) > 0.0f)) continue;
             const float area = triangle_area(scene.world_triangle(i, t));
             const double w = area * luminance(e);
             if (!(w > 0.0) || !std::isfinite(w)) continue;  // also a flattened instance
             emitters_.push_back({i, t});
+            emitter_emission_.push_back(e);
             total += w;
             emitter_cdf_.push_back(static_cast<float>(total));
             flux += 2.0 * kPi * area * glm::dvec3(e);
@@ -63,10 +72,7 @@ bool LightSources::is_delta(size_t i) const {
     return sources_[i].kind == Kind::light && light_is_delta(*sources_[i].light);
 }
 
-glm::vec3 LightSources::emission_of(const Emitter& e) const {
-    const MeshData& mesh = scene_.meshes()[scene_.instances()[e.instance].mesh];
-    return scene_.materials()[mesh.materials[e.triangle]].emission;
-}
+glm::vec3 LightSources::emission_of(size_t emitter) const { return emitter_emission_[emitter]; }
 
 size_t LightSources::pick_emitter(float u) const {
     const size_t k = static_cast<size_t>(std::upper_bound(emitter_cdf_.begin(), emitter_cdf_.end(), u) - emitter_cdf_.begin());
@@ -91,7 +97,7 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
             const float cos_light = std::fabs(glm::dot(ng, out.wi));
             const float pdf_area = emitter_probability_[k] / triangle_area(t);
             out.value = (d2 > 0.0f && pdf_area > 0.0f)
-                            ? emission_of(emitters_[k]) * (cos_light / (d2 * pdf_area))
+                            ? emission_of(k) * (cos_light / (d2 * pdf_area))
                             : glm::vec3(0.0f);
             out.pdf = cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
             return out;
@@ -143,7 +149,7 @@ EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float
                                            scene_.instances()[emitters_[k].instance].rounding_scale);
             out.direction = sample_cosine_hemisphere(ng, u4, std::fmod(2.0f * u5, 1.0f));
             // Φ_k / p_k, with Φ_k = 2π·A_k·L_k: the triangle's colour rides on the photon's power.
-            out.power = 2.0f * kPi * triangle_area(t) * emission_of(emitters_[k]) / emitter_probability_[k];
+            out.power = 2.0f * kPi * triangle_area(t) * emission_of(k) / emitter_probability_[k];
             return out;
         }
         case Kind::world: {

@@ -1,5 +1,7 @@
 #include "photonsplat/materials.h"
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "photonsplat/errors.h"
@@ -46,6 +48,7 @@ void validate(const Material& m, const std::string& where) {
             validate(c, static_cast<int>(m.factors.size()), where + ".closures[" + std::to_string(i) + "]");
             if (!c.is_delta() && !(c.kind == ClosureKind::diffuse && c.roughness == 0.0f)) ++lobes;
         }
+        validate(m.program, static_cast<int>(m.closures.size()), where + ".program");
         // shading.h keeps at most kMaxLobes evaluated lobes a hit (Lambert closures sum into one albedo).
         if (lobes > kMaxLobes)
             throw InvalidInput(where + ".closures", "at most " + std::to_string(kMaxLobes) +
@@ -119,11 +122,54 @@ void lower_simple_material(Material& m) {
     finalize_material(m);
 }
 
+void fold_constant_outputs(Material& m) {
+    ShaderProgram& p = m.program;
+    if (!p.code.empty()) return;
+    const auto vec = [&](int r) { return glm::vec3(p.registers[r], p.registers[r + 1], p.registers[r + 2]); };
+    std::vector<ProgramOutput> kept;
+    for (const ProgramOutput& o : p.outputs) {
+        Closure* c = o.index >= 0 && static_cast<size_t>(o.index) < m.closures.size() ? &m.closures[o.index] : nullptr;
+        const float f = p.registers[o.register_];
+        switch (o.target) {
+            case ProgramTarget::closure_color: c->color = glm::max(vec(o.register_), glm::vec3(0.0f)); break;
+            case ProgramTarget::closure_specular_color:
+                c->specular_color = glm::clamp(vec(o.register_), 0.0f, 1.0f);
+                break;
+            case ProgramTarget::closure_roughness: c->roughness = std::clamp(f, 0.0f, 1.0f); break;
+            case ProgramTarget::closure_alpha_x: c->alpha_x = std::clamp(f, 0.0f, 1.0f); break;
+            case ProgramTarget::closure_alpha_y: c->alpha_y = std::clamp(f, 0.0f, 1.0f); break;
+            case ProgramTarget::closure_ior: c->ior = std::max(f, 1e-3f); break;
+            case ProgramTarget::emission: m.emission = glm::max(vec(o.register_), glm::vec3(0.0f)); break;
+            case ProgramTarget::normal: kept.push_back(o); break;  // a fixed world direction: still per hit
+        }
+    }
+    p.outputs = std::move(kept);
+    if (p.outputs.empty()) p = ShaderProgram{};
+}
+
 void finalize_material(Material& m) {
     m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = false;
     m.anisotropic = m.textured = false;
     m.lambert_only = !m.holdout;
-    for (const Closure& c : m.closures) {
+    m.programmed = !m.program.empty();
+    m.program_emission = m.program_normal = false;
+    // What the program may set, per closure: such an input counts as varying (a colour as non-zero, a roughness
+    // or an alpha as rough and anisotropic).
+    std::vector<uint32_t> set(m.closures.size(), 0u);
+    for (const ProgramOutput& o : m.program.outputs) {
+        if (o.target == ProgramTarget::emission) m.program_emission = true;
+        if (o.target == ProgramTarget::normal) m.program_normal = true;
+        if (o.index >= 0 && static_cast<size_t>(o.index) < set.size() && o.target != ProgramTarget::emission &&
+            o.target != ProgramTarget::normal)
+            set[o.index] |= 1u << static_cast<int>(o.target);
+    }
+    for (size_t i = 0; i < m.closures.size(); ++i) {
+        Closure c = m.closures[i];
+        const auto sets = [&](ProgramTarget t) { return (set[i] & (1u << static_cast<int>(t))) != 0; };
+        if (sets(ProgramTarget::closure_color)) c.color = glm::vec3(1.0f);
+        if (sets(ProgramTarget::closure_roughness)) c.roughness = 1.0f;
+        if (sets(ProgramTarget::closure_alpha_x) != sets(ProgramTarget::closure_alpha_y)) c.alpha_x = c.alpha_y + 0.5f;
+        if (sets(ProgramTarget::closure_alpha_x) && sets(ProgramTarget::closure_alpha_y)) c.alpha_x = c.alpha_y + 0.5f;
         if (c.color == glm::vec3(0.0f)) continue;  // weighs nothing anywhere
         if (c.is_delta())
             m.has_delta = true;
@@ -139,6 +185,7 @@ void finalize_material(Material& m) {
         if (!(c.kind == ClosureKind::diffuse && c.roughness == 0.0f) || c.factors_on != 0 || c.factors_off != 0)
             m.lambert_only = false;
     }
+    if (m.programmed) m.textured = true;  // programs read UVs, attributes and the rest of the hit
     if (m.holdout) m.has_delta = m.has_lobes = m.directional = m.transmits = m.transparent = false;
 }
 

@@ -86,7 +86,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
-        const SurfacePoint s = surface_at(scene, ray, hit);
+        SurfacePoint s = surface_at(scene, ray, hit);
+        s.ray_kind = ShaderRay::photon;
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
         if (m.lambert_only) {
@@ -100,7 +101,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
             direct = false;
-            const glm::vec3 albedo = lambert_albedo(scene, s);
+            const glm::vec3 albedo = lambert_albedo(scene, s, -ray.direction);
             const float keep = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;
             power *= albedo / keep;

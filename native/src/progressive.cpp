@@ -30,6 +30,7 @@ struct RunningFlag {
 ProgressiveRender::ProgressiveRender(const Scene& scene, const Camera& camera, const RenderSettings& settings)
     : scene_(scene), camera_(camera.relative_to(scene.origin())), settings_(settings) {
     validate(settings_);
+    scene_.set_shader_camera(camera.shader_camera());
     check_frame_memory(scene_, camera_, settings_, FilmAccumulator::bytes_per_pixel(requested_outputs(settings_)));
     film_ = FilmAccumulator(camera_.width(), camera_.height(), requested_outputs(settings_));
     exact_method_ = splat_method_info(settings_.method).exact;

@@ -151,6 +151,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
                               const IterationParams& iteration, RenderControl& control) {
     validate(settings);
     const Camera camera = world_camera.relative_to(scene.origin());  // every stage works in render space
+    scene.set_shader_camera(world_camera.shader_camera());
     const std::unique_ptr<Splatter> splatter = make_splatter(settings);
     RenderResult result;
     const size_t pixels = static_cast<size_t>(camera.width()) * camera.height();

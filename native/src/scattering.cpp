@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/scene.h"
@@ -49,6 +50,11 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
     if (glm::dot(ns, ng) < 0.0f) ns = -ns;
     s.geometric_normal = ng;
     s.shading_normal = ns;
+    s.smooth_normal = ns;
+    s.instance = hit.instance;
+    s.triangle = hit.triangle;
+    s.bary = glm::vec2(hit.u, hit.v);
+    s.distance = hit.t;
     s.material = &scene.materials()[mesh.materials[t]];
     s.rounding_scale = instance.rounding_scale;
     s.uv = glm::vec2(0.0f);
@@ -69,6 +75,7 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
             orthonormal_basis(ns, s.tangent, b2);
         }
     }
+    if (s.material->program_normal) s.shading_normal = program_normal(scene, s, -ray.direction);
     return s;
 }
 

@@ -87,7 +87,13 @@ bool normal_matrix(const glm::mat4& m, glm::mat3& out) {
 size_t MeshData::bytes() const {
     return positions.capacity() * sizeof(glm::vec3) + indices.capacity() * sizeof(uint32_t) +
            normals.capacity() * sizeof(glm::vec3) + uvs.capacity() * sizeof(glm::vec2) +
-           materials.capacity() * sizeof(uint32_t);
+           materials.capacity() * sizeof(uint32_t) + attribute_bytes();
+}
+
+size_t MeshData::attribute_bytes() const {
+    size_t bytes = 0;
+    for (const Attribute& a : attributes) bytes += a.corners.capacity() * sizeof(glm::vec4);
+    return bytes;
 }
 
 Scene::Scene() = default;
@@ -106,6 +112,8 @@ uint32_t Scene::add_material(const Material& material) {
     for (size_t i = 0; i < material.closures.size(); ++i)
         check_texture(material.closures[i].texture, where + ".closures[" + std::to_string(i) + "].texture");
     Material lowered = material;
+    finalize_program(lowered.program, *this);
+    fold_constant_outputs(lowered);
     lower_simple_material(lowered);
     materials_.push_back(std::move(lowered));
     return static_cast<uint32_t>(materials_.size() - 1);
@@ -176,7 +184,25 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         if (!std::isfinite(mesh.uvs[i]))
             throw InvalidInput(where + ".uvs", "uv " + std::to_string(i / 2) + " is NaN or infinite");
 
-    // Everything is valid: keep the non-degenerate triangles, with per-corner normals and UVs.
+    for (size_t k = 0; k < mesh.attributes.size(); ++k) {
+        const MeshInput::Attribute& a = mesh.attributes[k];
+        const std::string field = where + ".attributes[" + std::to_string(k) + "]";
+        if (a.id >= attribute_names_.size()) throw InvalidInput(field, "unknown attribute id " + std::to_string(a.id));
+        if (a.components < 1 || a.components > 4)
+            throw InvalidInput(field, "must have 1 to 4 components, got " + std::to_string(a.components));
+        const size_t count = (a.per_corner ? mesh.triangle_count * 3 : mesh.vertex_count) * a.components;
+        if (count > 0 && a.data == nullptr) throw InvalidInput(field, "missing");
+        for (size_t i = 0; i < count; ++i)
+            if (!std::isfinite(a.data[i]))
+                throw InvalidInput(field, "value " + std::to_string(i / a.components) + " is NaN or infinite");
+    }
+    if (mesh.has_texspace) {
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(mesh.texspace_location[c]) || !std::isfinite(mesh.texspace_size[c]))
+                throw InvalidInput(where + ".texspace", "must be finite");
+    }
+
+    // Everything is valid: keep the non-degenerate triangles, with per-corner normals, UVs and attributes.
     MeshData data;
     data.name = mesh.name;
     data.positions.reserve(mesh.vertex_count);
@@ -194,6 +220,17 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
                                               : mesh.uvs + 2 * static_cast<size_t>(mesh.triangles[3 * t + corner]);
         return glm::vec2(uv[0], uv[1]);
     };
+    auto corner_attribute = [&](const MeshInput::Attribute& a, size_t t, int corner) {
+        const size_t i = a.per_corner ? 3 * t + corner : static_cast<size_t>(mesh.triangles[3 * t + corner]);
+        const float* v = a.data + i * a.components;
+        glm::vec4 value(0.0f, 0.0f, 0.0f, 1.0f);
+        for (int c = 0; c < a.components; ++c) value[c] = v[c];
+        return value;
+    };
+    for (const MeshInput::Attribute& a : mesh.attributes) {
+        data.attributes.emplace_back();
+        data.attributes.back().id = a.id;
+    }
     bool first = true;
     for (size_t t = 0; t < mesh.triangle_count; ++t) {
         const uint32_t i0 = mesh.triangles[3 * t], i1 = mesh.triangles[3 * t + 1], i2 = mesh.triangles[3 * t + 2];
@@ -213,6 +250,9 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         }
         if (mesh.uvs)
             for (int c = 0; c < 3; ++c) data.uvs.push_back(corner_uv(t, c));
+        for (size_t k = 0; k < mesh.attributes.size(); ++k)
+            for (int c = 0; c < 3; ++c)
+                data.attributes[k].corners.push_back(corner_attribute(mesh.attributes[k], t, c));
         data.materials.push_back(mesh.material_ids ? static_cast<uint32_t>(mesh.material_ids[t]) : 0u);
         if (first) data.bounds_min = data.bounds_max = v0;
         first = false;
@@ -220,6 +260,16 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
             data.bounds_min = glm::min(data.bounds_min, v);
             data.bounds_max = glm::max(data.bounds_max, v);
         }
+    }
+    if (mesh.has_texspace) {
+        data.texspace_location = mesh.texspace_location;
+        data.texspace_size = mesh.texspace_size;
+    } else if (!first) {
+        // Blender's automatic texture space: the box, a zero extent counting as 1.
+        data.texspace_location = 0.5f * (data.bounds_min + data.bounds_max);
+        data.texspace_size = 0.5f * (data.bounds_max - data.bounds_min);
+        for (int c = 0; c < 3; ++c)
+            if (data.texspace_size[c] == 0.0f) data.texspace_size[c] = 1.0f;
     }
     // Far from the object origin, positions become relative to the mesh's centre (MeshData): exact, since the
     // centre is a multiple of a power of two at least the float spacing of any vertex near it. Only beyond 64
@@ -317,6 +367,28 @@ void Scene::fit_origin() {
     if (!ray_tracer_) return;
     moved_instances_.resize(instances_.size());
     for (uint32_t i = 0; i < instances_.size(); ++i) moved_instances_[i] = i;
+}
+
+void Scene::set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random) {
+    if (instance >= instances_.size())
+        throw InvalidInput("instance", "is " + std::to_string(instance) + ", but the scene has " +
+                                           std::to_string(instances_.size()) + " instances");
+    const std::string where = "instance '" + instances_[instance].name + "'.object_info";
+    for (int c = 0; c < 4; ++c)
+        if (!std::isfinite(color[c])) throw InvalidInput(where + ".color", "must be finite");
+    if (!std::isfinite(pass_index)) throw InvalidInput(where + ".pass_index", "must be finite");
+    if (!std::isfinite(random)) throw InvalidInput(where + ".random", "must be finite");
+    Instance& i = instances_[instance];
+    i.color = color;
+    i.pass_index = pass_index;
+    i.random = random;
+}
+
+uint32_t Scene::attribute_id(const std::string& name) {
+    for (size_t i = 0; i < attribute_names_.size(); ++i)
+        if (attribute_names_[i] == name) return static_cast<uint32_t>(i);
+    attribute_names_.push_back(name);
+    return static_cast<uint32_t>(attribute_names_.size() - 1);
 }
 
 uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name, uint32_t visibility) {

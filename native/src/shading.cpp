@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
@@ -111,8 +112,14 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
 
 }  // namespace
 
-glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface) {
+glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
     glm::vec3 albedo(0.0f);
+    if (surface.material->programmed) {
+        ProgrammedMaterial pm;
+        run_material_program(scene, surface, wo, pm);
+        for (int i = 0; i < pm.closure_count; ++i) albedo += pm.closures[i].color;
+        return albedo;
+    }
     for (const Closure& c : surface.material->closures) {
         glm::vec3 weight = c.color;
         if (c.texture >= 0 && c.texture_target == TextureTarget::color)
@@ -122,7 +129,11 @@ glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface) {
     return albedo;
 }
 
-Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+namespace {
+
+// shade() for a given list of closures: the material's own, or those its program set at this hit.
+Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo, const Closure* closures,
+                    size_t closure_count) {
     Bsdf b;
     const Material& m = *surface.material;
     b.ng = surface.geometric_normal;
@@ -136,7 +147,8 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
     const float cos_no = std::clamp(glm::dot(surface.shading_normal, wo), 0.0f, 1.0f);
     for (size_t j = 0; j < m.factors.size(); ++j) factor[j] = evaluate_factor(m.factors[j], cos_no, !surface.entering);
 
-    for (const Closure& c : m.closures) {
+    for (size_t ci = 0; ci < closure_count; ++ci) {
+        const Closure& c = closures[ci];
         glm::vec3 weight = c.color;
         for (size_t j = 0; j < m.factors.size(); ++j) {
             if (c.factors_on & (1u << j)) weight *= factor[j];
@@ -190,6 +202,17 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
         }
     }
     return b;
+}
+
+}  // namespace
+
+Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+    const Material& m = *surface.material;
+    if (!m.programmed) return shade_closures(scene, surface, wo, m.closures.data(), m.closures.size());
+    // The program's values replace the constants (a closure's texture shortcut and the factors still apply).
+    ProgrammedMaterial programmed;
+    run_material_program(scene, surface, wo, programmed);
+    return shade_closures(scene, surface, wo, programmed.closures, static_cast<size_t>(programmed.closure_count));
 }
 
 bool is_transmission(const Lobe& l) { return l.kind == ClosureKind::translucent || l.kind == ClosureKind::refraction; }

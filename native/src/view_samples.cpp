@@ -11,6 +11,7 @@
 #include "photonsplat/direct_light.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
+#include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
@@ -139,16 +140,18 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (!path.after_lobe) p.emitted += path.throughput * scene.background();
             return;
         }
-        const SurfacePoint s = surface_at(scene, ray, hit);
+        SurfacePoint s = surface_at(scene, ray, hit);
+        if (!from_camera) s.ray_kind = ShaderRay::reflected;
         if (from_camera) {
             if (s.material->holdout) return;  // cut out: alpha stays 0, nothing is added
             p.first.alpha = 1.0f;
             p.first.depth = p.camera.view_depth(s.position);
             p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
-        if (s.material->emission != glm::vec3(0.0f)) p.emitted += path.throughput * s.material->emission * emitter_weight(path);
+        if (s.material->emission != glm::vec3(0.0f) || s.material->program_emission)
+            p.emitted += path.throughput * emission_at(scene, s, -ray.direction) * emitter_weight(path);
         if (s.material->lambert_only) {  // most surfaces: one part, the view sample, without a Bsdf to build
-            add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s), -ray.direction, path.throughput);
+            add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s, -ray.direction), -ray.direction, path.throughput);
             return;
         }
         const Bsdf b = shade(scene, s, -ray.direction);
@@ -248,6 +251,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     StageTimer timer(stats, "view_samples");
     // Render space (scene.h); render_iteration has done it already, but this stage is also called on its own.
     const Camera camera = world_camera.relative_to(scene.origin());
+    scene.set_shader_camera(world_camera.shader_camera());
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     ViewSamples out;

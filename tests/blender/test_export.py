@@ -12,7 +12,7 @@ import pytest
 
 from blender_helpers import enable_nodes, uniform_world
 from photonsplat import compat, export
-from photonsplat.export import materials
+from photonsplat.export import materials, shader_program
 
 
 class RecordingCore:
@@ -329,11 +329,17 @@ def test_mix_by_fresnel_and_layer_weight_is_view_dependent(empty_scene):
     r = one(spec, "reflection")
     assert r["factors_on"] == [0] and r["factors_off"] == [0]
     assert any("applied once" in n for n in spec.notes)        # the diffuse's (1 - F)^2: bits OR together
-    # Anything else driving Fac: its unconnected value, noted.
+    # Anything else driving Fac: compiled into the node program (without programs in the core: its unconnected
+    # value, noted).
     mat, mix, tree = _mix_material("Math", 0.3)
     tree.links.new(tree.nodes.new("ShaderNodeMath").outputs[0], mix.inputs["Fac"])
     spec = materials.convert_material(mat)
-    assert any("Math" in n for n in spec.notes) and approx(one(spec, "diffuse")["color"], (0.56, 0.28, 0.14))
+    if shader_program.op_table() is None:
+        assert any("Math" in n for n in spec.notes) and approx(one(spec, "diffuse")["color"], (0.56, 0.28, 0.14))
+    else:
+        assert spec.notes == [] and spec.core_arguments()["factors"] == []
+        targets = {(o["target"], o["index"]) for o in spec.core_arguments()["program"]["outputs"]}
+        assert targets == {("closure_color", 0), ("closure_color", 1)}
 
 
 def _group(name, inner_type):
@@ -385,7 +391,12 @@ def test_unsupported_setups_fall_back_with_a_note(empty_scene):
                                  shader.inputs["Base Color"])
     toon, _ = node_material("Toon", "ShaderNodeBsdfToon", Color=(0.1, 0.2, 0.3, 1.0))
     t = materials.convert_material(textured)
-    assert any("Checker" in n for n in t.notes)
+    if shader_program.op_table() is None:      # a core without node programs: the unconnected value, noted
+        assert any("Checker" in n for n in t.notes)
+    else:                                       # compiled: the diffuse colour is a program output
+        assert t.uses_program and not any("Checker" in n for n in t.notes)
+        outputs = t.core_arguments()["program"]["outputs"]
+        assert any(o["target"] == "closure_color" for o in outputs)
     o = materials.convert_material(toon)
     assert approx(one(o, "diffuse")["color"], (0.1, 0.2, 0.3)) and any("Toon" in n for n in o.notes)
 

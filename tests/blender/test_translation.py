@@ -86,8 +86,9 @@ def test_texture_colour_lands_in_the_image(source, empty_scene, tmp_path, core, 
     np.testing.assert_allclose(right, (grey,) * 3, rtol=0.05)
 
 
-def test_texture_behind_other_nodes_is_noted(empty_scene, tmp_path, core):
-    """A Noise Texture or a Mapping node is not interpreted: the render report names the material and what."""
+def test_nodes_behind_inputs_are_compiled_and_unsupported_ones_noted(empty_scene, tmp_path, core):
+    """A Noise Texture and a Mapping node in front of an image are compiled into the material's program (no note);
+    a node the core cannot evaluate (Ambient Occlusion) is named in the render report with its fallback."""
     bpy.ops.mesh.primitive_plane_add(size=2.0)
     plane = bpy.context.active_object
     mat, shader = material("Noisy", "ShaderNodeBsdfPrincipled")
@@ -103,15 +104,21 @@ def test_texture_behind_other_nodes_is_noted(empty_scene, tmp_path, core):
     plane.data.materials.append(mapped)
     plane.data.polygons[0].material_index = 0
     bpy.ops.mesh.primitive_cube_add(location=(0, 0, -2))
+    occluded, occluded_diffuse = material("Occluded")
+    ao = occluded.node_tree.nodes.new("ShaderNodeAmbientOcclusion")
+    occluded.node_tree.links.new(ao.outputs["Color"], occluded_diffuse.inputs["Color"])
     bpy.context.active_object.data.materials.append(mapped)
+    bpy.context.active_object.data.materials.append(occluded)
+    bpy.context.active_object.data.polygons[0].material_index = 1
     add_camera(empty_scene, ortho_scale=2.0)
     uniform_world(empty_scene)
     use_photonsplat(empty_scene, 16, 1000)
     render_pixels(tmp_path / "noted.exr")
     warnings = engine.last_outcome.warnings
     print("\n" + "\n".join(warnings))
-    assert any(w.startswith("Material 'Noisy'") and "Noise Texture" in w for w in warnings)
-    assert any(w.startswith("Material 'Mapped'") and "coordinates" in w for w in warnings)
+    assert not any(w.startswith("Material 'Noisy'") for w in warnings)
+    assert not any(w.startswith("Material 'Mapped'") for w in warnings)
+    assert any(w.startswith("Material 'Occluded'") and "Ambient Occlusion" in w for w in warnings)
 
 
 # --- instancing ----------------------------------------------------------------------------------------------

@@ -24,12 +24,14 @@ class Placement:
     holdout: bool
     visibility: tuple        # (camera, shadow, indirect) ray visibility
     matrix: np.ndarray       # float64 (4, 4) object to world
+    object_info: dict = None  # Object Info: colour, pass index, random (given to the core when a program reads it)
 
     @property
     def signature(self):
         """Everything but the transform: equal signatures differ at most by a set_instance_transform."""
         keys = tuple(None if m is None else m.name_full for m in self.materials)
-        return (self.object_name, self.mesh_key, keys, self.holdout, self.visibility)
+        info = None if self.object_info is None else tuple(sorted(self.object_info.items()))
+        return (self.object_name, self.mesh_key, keys, self.holdout, self.visibility, info)
 
 
 def placement(instance, name=None):
@@ -39,7 +41,59 @@ def placement(instance, name=None):
     return Placement(name=name or instance_name(instance), object_name=ob.original.name_full,
                      mesh_key=mesh_key(ob), mesh_name=ob.data.name if ob.data else ob.name,
                      materials=slots, holdout=is_holdout(ob), visibility=ray_visibility(ob),
-                     matrix=camera.matrix_to_numpy(instance.matrix_world))
+                     matrix=camera.matrix_to_numpy(instance.matrix_world), object_info=object_info(instance))
+
+
+def object_info(instance):
+    """What Cycles' Object Info node reads of a depsgraph instance: the object's colour and pass index, and its
+    random number. Cycles 3.4 (blender/object.cpp) takes the depsgraph instance's random_id for an instance and
+    hash_uint2(hash_string(object name), 0) for an object itself; the kernel's value is random_id / 0xFFFFFFFF in
+    float (scene/object.cpp)."""
+    ob = instance.object
+    if instance.is_instance:
+        random_id = int(getattr(instance, "random_id", 0)) & _MASK
+    else:
+        random_id = _hash_uint2(_hash_string(ob.name), 0)
+    random = float(np.float32(random_id) * (np.float32(1.0) / np.float32(0xFFFFFFFF)))
+    return {"color": tuple(float(c) for c in ob.color), "pass_index": int(ob.pass_index), "random": random}
+
+
+_MASK = 0xFFFFFFFF
+
+
+def _hash_string(text):
+    """Cycles' hash_string (util/hash.h): i = i * 37 + c over the UTF-8 bytes (unsigned, as Blender 3.4's Cycles
+    renders a non-ASCII name)."""
+    i = 0
+    for byte in text.encode("utf-8"):
+        i = (i * 37 + byte) & _MASK
+    return i
+
+
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & _MASK
+
+
+def _hash_uint2(kx, ky):
+    """Cycles' hash_uint2: Bob Jenkins' lookup3 final mix of two words."""
+    a = b = c = (0xDEADBEEF + (2 << 2) + 13) & _MASK
+    b = (b + ky) & _MASK
+    a = (a + kx) & _MASK
+    c ^= b
+    c = (c - _rot(b, 14)) & _MASK
+    a ^= c
+    a = (a - _rot(c, 11)) & _MASK
+    b ^= a
+    b = (b - _rot(a, 25)) & _MASK
+    c ^= b
+    c = (c - _rot(b, 16)) & _MASK
+    a ^= c
+    a = (a - _rot(c, 4)) & _MASK
+    b ^= a
+    b = (b - _rot(a, 14)) & _MASK
+    c ^= b
+    c = (c - _rot(b, 24)) & _MASK
+    return c
 
 
 def mesh_key(ob):
@@ -80,6 +134,26 @@ def is_holdout(ob):
     return bool(getattr(ob, "is_holdout", False))
 
 
+def material_spec(specs, material):
+    """The MaterialSpec of `material` (None: the default), converted once per cache `specs` (name -> spec)."""
+    key = None if material is None else material.name_full
+    if key not in specs:
+        specs[key] = materials.convert_material(material)
+    return specs[key]
+
+
+def mesh_needs(specs, where):
+    """What the materials of Placement `where` read from its mesh (mesh.MeshNeeds): only the attributes and the
+    texture space that some program uses are exported."""
+    needs = mesh.MeshNeeds()
+    if where.holdout:
+        return needs
+    for material in where.materials:
+        spec = material_spec(specs, material)
+        needs = needs | mesh.MeshNeeds(tuple(sorted(spec.attributes)), spec.uses_texspace)
+    return needs
+
+
 class GeometryTable:
     """Adds each distinct mesh (with its materials) to the core scene once, then one core instance per
     placement showing it: Embree builds each mesh's BVH once however often it is instanced."""
@@ -95,40 +169,56 @@ class GeometryTable:
         return sum(1 for mesh_id, _ in self._ids.values() if mesh_id is not None)
 
     def add(self, where, read_mesh):
-        """Adds Placement `where`; read_mesh() gives its mesh.TriangleMesh (or None), called only for a mesh
-        not added yet. Returns (core instance id, triangles), (None, 0) when there is nothing to render."""
+        """Adds Placement `where`; read_mesh(needs) gives its mesh.TriangleMesh (or None) with what mesh.MeshNeeds
+        `needs` asks for, called only for a mesh not added yet. Returns (core instance id, triangles), (None, 0)
+        when there is nothing to render."""
         slots = [self._materials.id_for(m) for m in where.materials]
         if where.holdout:
             slots = [self._materials.holdout_id()] * len(slots)
         key = (where.mesh_key, tuple(slots))
         if key not in self._ids:
-            self._ids[key] = self._add_mesh(read_mesh(), where.mesh_name, slots)
+            needs = mesh_needs(self._materials.specs, where)
+            self._ids[key] = self._add_mesh(read_mesh(needs), where.mesh_name, slots, needs)
         mesh_id, triangles = self._ids[key]
         if mesh_id is None:
             return None, 0             # no faces (only loose edges or points): nothing to hit
         camera_ray, shadow, indirect = where.visibility
+        extra = {}
+        if not where.holdout and where.object_info is not None and any(
+                material_spec(self._materials.specs, m).uses_object_info for m in where.materials):
+            extra["object_info"] = dict(where.object_info)
         instance_id = self._core_scene.add_instance(mesh_id=mesh_id, transform=where.matrix, name=where.name,
                                                     visible_camera=camera_ray, visible_shadow=shadow,
-                                                    visible_indirect=indirect)
+                                                    visible_indirect=indirect, **extra)
         self.instances_by_object.setdefault(where.object_name, []).append(instance_id)
         return instance_id, triangles
 
-    def _add_mesh(self, triangles, name, slots):
+    def _add_mesh(self, triangles, name, slots, needs):
         if triangles is None:
             return None, 0
+        extra = {}
+        # Keyed by the core's attribute ids (Scene.attribute_id), which the programs' params name too.
+        attributes = {self._core_scene.attribute_id(n): triangles.attributes[n] for n in needs.attributes
+                      if n in triangles.attributes}
+        if attributes:
+            extra["attributes"] = attributes
+        if needs.texspace and triangles.texspace is not None:
+            extra["texspace"] = triangles.texspace
         mesh_id = self._core_scene.add_mesh_data(name=name, vertices=triangles.vertices,
                                                  triangles=triangles.triangles, normals=triangles.normals,
                                                  uvs=triangles.uvs,
-                                                 material_ids=mesh.scene_material_ids(triangles.slots, slots))
+                                                 material_ids=mesh.scene_material_ids(triangles.slots, slots),
+                                                 **extra)
         return mesh_id, len(triangles.triangles)
 
 
 class MaterialTable:
     """Adds every Blender material to the core scene once, and remembers its index there."""
 
-    def __init__(self, core_scene, notes):
+    def __init__(self, core_scene, notes, specs=None):
         self._core_scene = core_scene
         self._notes = notes
+        self.specs = {} if specs is None else specs    # material name -> MaterialSpec (shared with the sync)
         self._ids = {}
         self._textures = {}            # image name -> core texture index
         self._holdout = None
@@ -148,10 +238,12 @@ class MaterialTable:
     def id_for(self, material):
         key = None if material is None else material.name_full
         if key not in self._ids:
-            spec = materials.convert_material(material)
-            arguments = spec.core_arguments(texture_index=lambda reference: self._texture_index(spec, reference))
+            spec = material_spec(self.specs, material)
+            attribute_id = self._core_scene.attribute_id if spec.attributes else None
+            arguments = spec.core_arguments(texture_index=lambda reference: self._texture_index(spec, reference),
+                                            attribute_id=attribute_id)
             self._ids[key] = self._core_scene.add_material(**arguments)
-            self.emissive = self.emissive or max(spec.emission) > 0.0
+            self.emissive = self.emissive or spec.emits
             if spec.notes:
                 self._notes.append(f"Material '{spec.name}': " + "; ".join(unique(spec.notes)))
         return self._ids[key]

@@ -15,17 +15,30 @@ weights and parameters (closures.h lists the kinds the core renders):
   Glass                reflection + refraction split by a Fresnel factor of its IOR
   Refraction           refraction only
   Translucent, Transparent, Velvet, Emission, Holdout   their closures (holdout: the whole material)
-  Mix, Add Shader      the two lists, weighted by a constant Fac, or by a view-dependent factor when Fac comes
-                       from a Fresnel or Layer Weight node (evaluated by the core at each hit)
+  Mix, Add Shader      the two lists, weighted by Fac (a constant or a program value), or by a view-dependent
+                       factor when Fac comes from a Fresnel or Layer Weight node of constant IOR / Blend
+                       (evaluated by the core for each direction)
   node groups          followed inside, and back out through their Group Input sockets
 
 Microfacet closures with Blender roughness <= ROUGHNESS_SHARP are exported as distribution "sharp" (a perfect
 mirror or refraction, which the core follows to focus caustics): Cycles' alpha = r^2 is then below 0.0025.
 
-Colours may come from an Image Texture node plugged in directly: the core looks the image up at the hit's UV
-(export/textures.py). Any other node driving an input (a Mix RGB, a Math node...) is not interpreted: the
-socket's unconnected value is used and a note says so. Each material's notes list only what is still
-approximated; the sync (export/sync.py) reports them and the material panel shows them.
+Inputs driven by nodes. An Image Texture node with its default settings plugged straight into a colour stays a
+closure texture the core looks up at the hit's UV (export/textures.py). Any other node graph driving a closure input,
+a Mix Shader's Fac, an Emission or a Normal input is compiled into the material's node program
+(export/shader_program.py: a ProgramBuilder per material), which the core runs at each hit: every closure input is
+then a Value, a constant or a register. The lowering's own arithmetic (the Principled formulas, a Mix Shader's factor
+scaling its closures' weights, Glass's Fresnel split) folds constants and emits ops otherwise; a register that a
+closure ends up with becomes a program output (closure_color, closure_specular_color, closure_roughness,
+closure_alpha_x, closure_alpha_y, closure_ior; emission; normal). A material whose inputs are all constant has no
+program and comes out as before programs. A microfacet closure whose roughness is programmed stays a GGX or Beckmann
+lobe (never 'sharp'). One shading normal per material: the first Normal input driven by nodes (Bump, Normal Map...)
+is every closure's, with a note when another closure's Normal input names another. A Mix Shader's Fac from a Fresnel or Layer Weight node of constant
+IOR/Blend stays a view-dependent factor of the closures (MixFactor, evaluated by the core for each direction).
+
+Without node programs in the core (an older _core without shader_ops()), driven inputs take the socket's unconnected
+value with a note, as before. Each material's notes list only what is still approximated; the sync (export/sync.py)
+reports them and the material panel shows them.
 """
 
 import math
@@ -35,6 +48,8 @@ import numpy as np
 
 from .. import compat
 from . import textures
+from . import shader_program as sp
+from .shader_program import is_const, is_reg, positive
 
 # Blender roughness at or below which a microfacet closure is a perfect mirror or refraction (the core's
 # kGlossyMirrorRoughness).
@@ -83,10 +98,11 @@ class Closure:
                                               and self.distribution == "sharp")
 
     def is_lambert(self):
-        return self.kind == "diffuse" and self.roughness == 0.0
+        return self.kind == "diffuse" and is_const(self.roughness) and self.roughness == 0.0
 
     def weight(self):
-        return max(self.color)
+        """The largest channel of the weight; 1 for a programmed one (unknown before the hit)."""
+        return max(self.color) if is_const(self.color) else 1.0
 
     def merge_key(self):
         """Closures equal but for their colour add up to one."""
@@ -104,9 +120,10 @@ class Shader:
     holdout: float = 0.0
     summary: str = ""          # how describe() names it: "principled", "glass, IOR 1.50"...
 
-    def scaled(self, w):
-        return Shader([replace(c, color=_scaled(c.color, w)) for c in self.closures],
-                      _scaled(self.emission, w), self.holdout * w, self.summary)
+    def scaled(self, w, b=None):
+        """Every weight times `w` (a Value; `b` the ProgramBuilder when it is a register)."""
+        return Shader([replace(c, color=sp.mul(b, c.color, w)) for c in self.closures],
+                      sp.mul(b, self.emission, w), sp.mul(b, self.holdout, w), self.summary)
 
 
 @dataclass
@@ -119,8 +136,46 @@ class MaterialSpec:
     notes: list = field(default_factory=list)
     holdout: bool = False          # Holdout shader or holdout object: cut out of the image
     summary: str = "diffuse"
+    program: object = None         # shader_program.ProgramBuilder, or None (no node programs in the core)
+    normal: object = None          # the shading normal's Reg (a Normal input driven by nodes), or None
 
     kind = "closures"
+
+    @property
+    def emits(self):
+        """Whether the material may emit light (a programmed emission may)."""
+        return positive(self.emission, 0.0)
+
+    @property
+    def uses_program(self):
+        """Whether add_material gets a program: some closure input, the emission or the normal is a register."""
+        return bool(self._program_outputs())
+
+    @property
+    def attributes(self):
+        """Mesh attribute names the program reads (the mesh export exports only those)."""
+        return list(self.program.attributes) if self.uses_program else []
+
+    @property
+    def uses_texspace(self):
+        return self.uses_program and self.program.uses_texspace
+
+    @property
+    def uses_object_info(self):
+        return self.uses_program and self.program.uses_object_info
+
+    def _program_outputs(self):
+        """(target, closure index, Reg) of every register the closures, the emission and the normal hold."""
+        outputs = []
+        for j, c in enumerate(self.closures):
+            for target, value in _closure_targets(c):
+                if is_reg(value):
+                    outputs.append((target, j, value))
+        if is_reg(self.emission):
+            outputs.append(("emission", 0, self.emission))
+        if self.normal is not None:
+            outputs.append(("normal", 0, self.normal))
+        return outputs
 
     @property
     def textures(self):
@@ -136,23 +191,26 @@ class MaterialSpec:
         index = {key: j for j, key in enumerate(self.factors)}
         result = []
         for c in self.closures:
-            d = dict(kind=c.kind, color=tuple(c.color))
+            # A programmed input gets a placeholder here; the program sets it at each hit.
+            d = dict(kind=c.kind, color=_placeholder(c.color, WHITE))
             if c.kind in ("reflection", "refraction"):
-                d.update(distribution=c.distribution, alpha_x=float(c.alpha_x), alpha_y=float(c.alpha_y),
-                         ior=float(c.ior))
+                d.update(distribution=c.distribution, alpha_x=_placeholder(c.alpha_x, 0.25),
+                         alpha_y=_placeholder(c.alpha_y, 0.25), ior=_placeholder(c.ior, 1.45))
             if c.kind == "reflection":
                 d["fresnel"] = c.fresnel
                 if c.fresnel in ("principled", "schlick"):
-                    d["specular_color"] = tuple(c.specular_color)
+                    d["specular_color"] = _placeholder(c.specular_color, (0.5, 0.5, 0.5))
             if c.kind in ("diffuse", "principled_diffuse", "velvet"):
-                d["roughness"] = float(c.roughness)
+                d["roughness"] = _placeholder(c.roughness, 0.5)
             if c.texture is not None:
                 texture = -1 if texture_index is None else int(texture_index(c.texture))
                 if texture >= 0:
                     d["texture"] = texture
                     d["texture_target"] = c.texture_target
-                elif c.texture_target == "color":    # unreadable image: its fallback grey, as before
+                elif c.texture_target == "color" and is_const(c.color):   # unreadable image: its fallback grey
                     d["color"] = tuple(w * g for w, g in zip(c.color, DEFAULT_COLOR))
+                elif c.texture_target == "color":
+                    pass                         # a programmed weight: the image's grey is not applied
                 else:
                     d["specular_color"] = DEFAULT_COLOR
             if c.factors_on:
@@ -162,15 +220,31 @@ class MaterialSpec:
             result.append(d)
         return result
 
-    def core_arguments(self, texture_index=None):
+    def core_arguments(self, texture_index=None, attribute_id=None):
         """Keyword arguments for core Scene.add_material(); `texture_index` maps a TextureRef to the core's
-        texture index (without it, textured closures get -1: no texture)."""
+        texture index (without it, textured closures get -1: no texture), `attribute_id` a mesh attribute name to
+        the core's attribute id (the core Scene's attribute_id). `program` only when there is one."""
         arguments = dict(name=self.name, kind="closures", closures=self.closure_dicts(texture_index),
                          factors=[dict(kind=k, value=float(v)) for k, v in self.factors],
-                         emission=tuple(self.emission))
+                         emission=_placeholder(self.emission, BLACK))
+        outputs = self._program_outputs()
+        if outputs:
+            arguments["program"] = self.program.encode(outputs, texture_index, attribute_id)
         if self.holdout:
             arguments["holdout"] = True
         return arguments
+
+    @property
+    def program_textures(self):
+        """The TextureRefs the program's image ops read, once each."""
+        if not self.uses_program:
+            return []
+        found = {}
+        for _, params, _, _ in self.program.instructions:
+            for p in params:
+                if isinstance(p, sp.TextureParam):
+                    found.setdefault(p.reference.key, p.reference)
+        return list(found.values())
 
     @property
     def no_surface(self):
@@ -186,11 +260,32 @@ class MaterialSpec:
             text += ": " + " + ".join(labels)
         if not self.closures:
             text = "black" if self.summary in ("", "diffuse") else self.summary
-        if any(c > 0.0 for c in self.emission):
+        if self.emits:
             text += ", emitting"
-        for reference in self.textures:
+        for reference in self.textures + self.program_textures:
             text += f", image '{reference.image.name}'"
+        if self.uses_program:
+            text += f", node program ({len(self.program.instructions)} ops)"
         return text
+
+
+def _placeholder(value, default):
+    """A closure input as the binding takes it: a constant as is, a register's placeholder `default`."""
+    if is_reg(value):
+        return tuple(default) if isinstance(default, tuple) else float(default)
+    return tuple(float(c) for c in value) if isinstance(value, tuple) else float(value)
+
+
+def _closure_targets(c):
+    """(program target, Value) of the inputs of closure `c` that the core reads."""
+    targets = [("closure_color", c.color)]
+    if c.kind in ("reflection", "refraction"):
+        targets += [("closure_alpha_x", c.alpha_x), ("closure_alpha_y", c.alpha_y), ("closure_ior", c.ior)]
+    if c.kind == "reflection" and c.fresnel in ("principled", "schlick"):
+        targets.append(("closure_specular_color", c.specular_color))
+    if c.kind in ("diffuse", "principled_diffuse", "velvet"):
+        targets.append(("closure_roughness", c.roughness))
+    return targets
 
 
 def default_material():
@@ -221,22 +316,55 @@ def convert_material(material):
         shader = Shader([Closure("diffuse", DEFAULT_COLOR, label="diffuse")], summary="diffuse")
         return _finish(name, shader, notes)
 
+    notes = _Notes(sp.op_table())
+    if notes.program is not None:
+        notes.program.material_index = int(getattr(material, "pass_index", 0))
     try:
         shader = _convert_socket(output.inputs["Surface"], (), notes)
+        _check_displacement(output, notes)
+        return _finish(name, shader, notes)
     except RecursionError:
-        notes.append("node tree too deeply nested: rendered as default grey diffuse")
+        notes = _Notes(None, ["node tree too deeply nested: rendered as default grey diffuse"])
         shader = Shader([Closure("diffuse", DEFAULT_COLOR, label="diffuse")], summary="diffuse")
+    except Exception as error:   # noqa: BLE001 -- a node setup the compiler did not foresee: never fail a render
+        if notes.program is None:
+            raise
+        failure = f"node program not compiled ({type(error).__name__}: {error}): driven inputs use their values"
+        notes = _Notes(None, [failure])
+        shader = _convert_socket(output.inputs["Surface"], (), notes)
     return _finish(name, shader, notes)
+
+
+class _Notes(list):
+    """One material's notes, carrying what the conversion shares: its ProgramBuilder (None without node programs in
+    the core) and the shading normal found so far."""
+
+    def __init__(self, ops, lines=()):
+        super().__init__(lines)
+        self.program = sp.ProgramBuilder(ops, self) if ops else None
+        self.normal = None
+
+
+def _program(notes):
+    """The ProgramBuilder of the material being converted, or None (plain note lists: the world, lights)."""
+    return getattr(notes, "program", None)
+
+
+def _check_displacement(output, notes):
+    socket = output.inputs.get("Displacement")
+    if socket is not None and source_node(socket) is not None:
+        notes.append("Displacement output ignored")
 
 
 # --- the finished material ------------------------------------------------------------------------------------
 
 def _finish(name, shader, notes):
     """The closures checked against what the core accepts: finite, in range, merged, within its limits."""
+    b = _program(notes)
     closures = []
     for c in shader.closures:
         c = _sanitised(c, notes)
-        if max(c.color) > WEIGHT_CUTOFF:
+        if positive(c.color, WEIGHT_CUTOFF):
             closures.append(c)
     # Equal closures add up (a Mix of two diffuse shaders is one diffuse closure).
     merged = {}
@@ -244,8 +372,7 @@ def _finish(name, shader, notes):
         key = c.merge_key()
         if key in merged:
             kept = merged[key]
-            merged[key] = replace(kept, color=tuple(a + b for a, b in zip(kept.color, c.color)),
-                                  label=kept.label if kept.label == c.label else kept.label)
+            merged[key] = replace(kept, color=sp.add(b, kept.color, c.color))
         else:
             merged[key] = c
     closures = list(merged.values())
@@ -261,12 +388,16 @@ def _finish(name, shader, notes):
         dropped = set(factors[MAX_FACTORS:])
         notes.append(f"more than {MAX_FACTORS} view-dependent mix factors: {len(dropped)} evaluated at normal "
                      "incidence")
-        closures = [_freeze_factors(c, dropped) for c in closures]
+        closures = [_freeze_factors(c, dropped, b) for c in closures]
         factors = factors[:MAX_FACTORS]
 
-    emission = tuple(max(e, 0.0) if math.isfinite(e) else 0.0 for e in shader.emission)
+    emission = shader.emission
+    if is_const(emission):
+        emission = tuple(max(e, 0.0) if math.isfinite(e) else 0.0 for e in emission)
     holdout = False
-    if shader.holdout > WEIGHT_CUTOFF:
+    if is_reg(shader.holdout):
+        notes.append("holdout weighted by nodes rendered as no holdout")
+    elif shader.holdout > WEIGHT_CUTOFF:
         holdout = shader.holdout >= 0.5
         if shader.holdout < 1.0 - 1e-6:
             notes.append(f"partial holdout (weight {shader.holdout:.2f}) rendered as "
@@ -276,18 +407,28 @@ def _finish(name, shader, notes):
     if not closures:
         # Nothing reflects: a black surface (Cycles renders an unconnected Surface black).
         closures = [Closure("diffuse", BLACK, label="black")]
-    return MaterialSpec(name=name, closures=closures, factors=factors, emission=emission, notes=notes,
-                        holdout=holdout, summary=shader.summary or "black")
+    # (A Bump node compiles its height three times: a note from there comes once.)
+    return MaterialSpec(name=name, closures=closures, factors=factors, emission=emission,
+                        notes=list(dict.fromkeys(notes)),
+                        holdout=holdout, summary=shader.summary or "black", program=b,
+                        normal=None if holdout else getattr(notes, "normal", None))
 
 
 def _sanitised(c, notes):
+    """Constant inputs made finite and in range (programmed ones are the core's to keep in range)."""
     def finite(value, default):
         return float(value) if math.isfinite(value) else default
-    color = tuple(max(finite(v, 0.0), 0.0) for v in c.color)
-    specular = tuple(_clamp01(finite(v, 0.0)) for v in c.specular_color)
-    return replace(c, color=color, specular_color=specular, roughness=_clamp01(finite(c.roughness, 0.0)),
-                   alpha_x=_clamp01(finite(c.alpha_x, 0.0)), alpha_y=_clamp01(finite(c.alpha_y, 0.0)),
-                   ior=max(finite(c.ior, 1.45), 1e-5))
+
+    def each(value, fix):
+        if is_reg(value):
+            return value
+        return tuple(fix(v) for v in value) if isinstance(value, tuple) else fix(value)
+    return replace(c, color=each(c.color, lambda v: max(finite(v, 0.0), 0.0)),
+                   specular_color=each(c.specular_color, lambda v: _clamp01(finite(v, 0.0))),
+                   roughness=each(c.roughness, lambda v: _clamp01(finite(v, 0.0))),
+                   alpha_x=each(c.alpha_x, lambda v: _clamp01(finite(v, 0.0))),
+                   alpha_y=each(c.alpha_y, lambda v: _clamp01(finite(v, 0.0))),
+                   ior=each(c.ior, lambda v: max(finite(v, 1.45), 1e-5)))
 
 
 def _directional(c):
@@ -311,7 +452,7 @@ def _within_limits(closures, notes):
     return closures
 
 
-def _freeze_factors(c, dropped):
+def _freeze_factors(c, dropped, b=None):
     w = 1.0
     for key in c.factors_on:
         if key in dropped:
@@ -319,7 +460,7 @@ def _freeze_factors(c, dropped):
     for key in c.factors_off:
         if key in dropped:
             w *= 1.0 - _factor_at_normal_incidence(key)
-    return replace(c, color=_scaled(c.color, w), factors_on=tuple(k for k in c.factors_on if k not in dropped),
+    return replace(c, color=sp.mul(b, c.color, w), factors_on=tuple(k for k in c.factors_on if k not in dropped),
                    factors_off=tuple(k for k in c.factors_off if k not in dropped))
 
 
@@ -338,6 +479,7 @@ def _convert_socket(socket, stack, notes):
 
 
 def _principled(node, stack, notes):
+    _shading_normal(node, stack, notes)
     if compat.principled_input("specular") is None:
         return _principled_v2(node, stack, notes)
     return _principled_v1(node, stack, notes)
@@ -345,148 +487,161 @@ def _principled(node, stack, notes):
 
 def _principled_v1(node, stack, notes):
     """Principled BSDF v1 (Blender 3.x), as Cycles 3.4's svm_closure.h lowers CLOSURE_BSDF_PRINCIPLED_ID."""
+    b = _program(notes)
     inputs = _Inputs(node, stack, notes)
     base, texture = inputs.color_or_texture("Base Color")
-    metallic = _clamp01(inputs.number("Metallic"))
-    subsurface = _clamp01(inputs.number("Subsurface"))
-    specular = max(inputs.number("Specular", 0.5), 0.0)
-    roughness = _clamp01(inputs.number("Roughness", 0.5))
-    specular_tint = _clamp01(inputs.number("Specular Tint"))
-    anisotropic = _clamp01(inputs.number("Anisotropic"))
-    sheen = max(inputs.number("Sheen"), 0.0)
-    sheen_tint = _clamp01(inputs.number("Sheen Tint", 0.5))
-    clearcoat = max(inputs.number("Clearcoat"), 0.0)
-    clearcoat_roughness = _clamp01(inputs.number("Clearcoat Roughness", 0.03))
-    eta = max(inputs.number("IOR", 1.45), 1e-5)
-    transmission = _clamp01(inputs.number("Transmission"))
-    transmission_roughness = _clamp01(inputs.number("Transmission Roughness"))
+    metallic = sp.clamp01(b, inputs.number("Metallic"))
+    subsurface = sp.clamp01(b, inputs.number("Subsurface"))
+    specular = sp.clamp_min(b, inputs.number("Specular", 0.5), 0.0)
+    roughness = sp.clamp01(b, inputs.number("Roughness", 0.5))
+    specular_tint = sp.clamp01(b, inputs.number("Specular Tint"))
+    anisotropic = sp.clamp01(b, inputs.number("Anisotropic"))
+    sheen = sp.clamp_min(b, inputs.number("Sheen"), 0.0)
+    sheen_tint = sp.clamp01(b, inputs.number("Sheen Tint", 0.5))
+    clearcoat = sp.clamp_min(b, inputs.number("Clearcoat"), 0.0)
+    clearcoat_roughness = sp.clamp01(b, inputs.number("Clearcoat Roughness", 0.03))
+    eta = sp.clamp_min(b, inputs.number("IOR", 1.45), 1e-5)
+    transmission = sp.clamp01(b, inputs.number("Transmission"))
+    transmission_roughness = sp.clamp01(b, inputs.number("Transmission Roughness"))
     rotation = inputs.number("Anisotropic Rotation")
     distribution = getattr(node, "distribution", "GGX")
-    _principled_common_notes(node, inputs, notes)
+    if texture is not None and b is not None and (
+            positive(subsurface, WEIGHT_CUTOFF) or positive(specular_tint, 0.0)
+            or (positive(sheen, WEIGHT_CUTOFF) and positive(sheen_tint, 0.0))
+            or (is_reg(metallic) or 0.0 < metallic < 1.0)):
+        # The image enters the formulas (a blend, a hue, a partly metallic colour): compiled into the program
+        # rather than multiplying closures as a closure texture.
+        base, texture = inputs.color("Base Color"), None
 
-    diffuse_weight = (1.0 - metallic) * (1.0 - transmission)
-    final_transmission = transmission * (1.0 - metallic)
-    specular_weight = 1.0 - final_transmission
+    diffuse_weight = sp.mul(b, sp.one_minus(b, metallic), sp.one_minus(b, transmission))
+    final_transmission = sp.mul(b, transmission, sp.one_minus(b, metallic))
+    specular_weight = sp.one_minus(b, final_transmission)
     closures = []
 
     # Diffuse: Burley's, of Base Color blended towards Subsurface Color (Cycles' subsurface albedo).
     color = base
-    if subsurface > WEIGHT_CUTOFF:
-        color = _mix(base, inputs.color("Subsurface Color"), subsurface)
+    if positive(subsurface, WEIGHT_CUTOFF):
+        color = sp.lerp(b, base, inputs.color("Subsurface Color"), subsurface)
         notes.append("subsurface rendered as diffuse")
         if texture is not None:
             notes.append(f"image '{texture.image.name}' rendered without its blend towards Subsurface Color")
-    if diffuse_weight > WEIGHT_CUTOFF:
-        closures.append(_textured(Closure("principled_diffuse", _scaled(color, diffuse_weight),
-                                          roughness=roughness, label="diffuse"), texture, diffuse_weight))
+    if positive(diffuse_weight, WEIGHT_CUTOFF):
+        closures.append(_textured(Closure("principled_diffuse", sp.mul(b, color, diffuse_weight),
+                                          roughness=roughness, label="diffuse"), texture, diffuse_weight, b))
 
     # Sheen: white blended towards the base colour's hue by Sheen Tint.
-    if diffuse_weight > WEIGHT_CUTOFF and sheen > WEIGHT_CUTOFF:
-        tint = _hue(base, _LUMINANCE)
-        sheen_color = _mix(WHITE, tint, sheen_tint)
-        closures.append(Closure("sheen", _scaled(sheen_color, sheen * diffuse_weight), label="sheen"))
-        if texture is not None and sheen_tint > 0.0:
+    if positive(diffuse_weight, WEIGHT_CUTOFF) and positive(sheen, WEIGHT_CUTOFF):
+        tint = _hue(b, base, _LUMINANCE)
+        sheen_color = sp.lerp(b, WHITE, tint, sheen_tint)
+        closures.append(Closure("sheen", sp.mul(b, sheen_color, sp.mul(b, sheen, diffuse_weight)), label="sheen"))
+        if texture is not None and positive(sheen_tint, 0.0):
             notes.append("sheen tinted by the image's fallback colour, not the image")
 
     # Specular reflection: cspec0 mixes the tinted 0.08 x Specular with Base Color by Metallic.
-    alpha_x, alpha_y = _principled_alphas(roughness, anisotropic)
-    if specular_weight > WEIGHT_CUTOFF and (specular > WEIGHT_CUTOFF or metallic > WEIGHT_CUTOFF):
-        tint = _hue(base, (0.3, 0.6, 0.1))
-        tinted = _mix(WHITE, tint, specular_tint)
-        cspec0 = tuple(specular * 0.08 * t * (1.0 - metallic) + b * metallic for t, b in zip(tinted, base))
-        ior = 2.0 / (1.0 - math.sqrt(min(0.08 * specular, 0.999999))) - 1.0
-        dist = "ggx" if distribution == "GGX" or roughness <= 0.075 else "multi_ggx"
-        c = _microfacet("reflection", (specular_weight,) * 3, roughness, alpha_x, alpha_y, dist,
+    alpha_x, alpha_y = _principled_alphas(b, roughness, anisotropic)
+    if positive(specular_weight, WEIGHT_CUTOFF) and (positive(specular, WEIGHT_CUTOFF)
+                                                     or positive(metallic, WEIGHT_CUTOFF)):
+        tint = _hue(b, base, (0.3, 0.6, 0.1))
+        tinted = sp.lerp(b, WHITE, tint, specular_tint)
+        cspec0 = sp.add(b, sp.mul(b, sp.mul(b, sp.mul(b, specular, 0.08), tinted), sp.one_minus(b, metallic)),
+                        sp.mul(b, base, metallic))
+        ior = sp.sub(b, sp.divide(b, 2.0, sp.one_minus(b, sp.sqrt(b, sp.minimum(b, sp.mul(b, 0.08, specular),
+                                                                                   0.999999)))), 1.0)
+        smooth = is_const(roughness) and roughness <= 0.075
+        dist = "ggx" if distribution == "GGX" or smooth else "multi_ggx"
+        c = _microfacet("reflection", _rgb(b, specular_weight), roughness, alpha_x, alpha_y, dist,
                         fresnel="principled", specular_color=cspec0, ior=ior, label="specular")
-        if texture is not None and metallic >= 1.0:
+        if texture is not None and is_const(metallic) and metallic >= 1.0:
             c = replace(c, texture=texture, texture_target="specular_color")
-        elif texture is not None and metallic > 0.0:
+        elif texture is not None and positive(metallic, 0.0):
             notes.append(f"image '{texture.image.name}' not applied to the partly metallic specular colour")
         closures.append(c)
-        if alpha_x != alpha_y:
+        if is_reg(anisotropic) or alpha_x != alpha_y:
             _note_rotation(notes, rotation, node.inputs["Tangent"].is_linked)
 
     # Transmission: Fresnel-weighted reflection and (1 - Fresnel)-weighted refraction of Base Color.
-    if final_transmission > WEIGHT_CUTOFF:
-        cspec0 = tuple(b * specular_tint + 1.0 - specular_tint for b in base)
-        fresnel = ("fresnel", eta)
-        if roughness <= ROUGHNESS_SHARP or distribution == "GGX":
-            refraction_roughness = (1.0 - (1.0 - roughness) * (1.0 - transmission_roughness)
+    if positive(final_transmission, WEIGHT_CUTOFF):
+        cspec0 = sp.add(b, sp.mul(b, base, specular_tint), sp.one_minus(b, specular_tint))
+        if distribution == "GGX" or (is_const(roughness) and roughness <= ROUGHNESS_SHARP):
+            refraction_roughness = (sp.one_minus(b, sp.mul(b, sp.one_minus(b, roughness),
+                                                           sp.one_minus(b, transmission_roughness)))
                                     if distribution == "GGX" else roughness)
-            dist = "ggx"
         else:
             refraction_roughness = roughness
-            dist = "ggx"
             notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
-        closures.append(replace(
-            _microfacet("reflection", (final_transmission,) * 3, roughness, roughness ** 2, roughness ** 2, dist,
-                        fresnel="principled", specular_color=cspec0, ior=eta, label="glass reflection"),
-            factors_on=(fresnel,)))
-        refraction = _microfacet("refraction", _scaled(base, final_transmission), refraction_roughness,
-                                 refraction_roughness ** 2, refraction_roughness ** 2, dist, ior=eta,
-                                 label="refraction")
-        closures.append(_textured(replace(refraction, factors_off=(fresnel,)), texture, final_transmission))
+        on, off = _fresnel_split(b, notes, eta)
+        r2 = sp.square(b, roughness)
+        reflection = _microfacet("reflection", _rgb(b, final_transmission), roughness, r2, r2, "ggx",
+                                 fresnel="principled", specular_color=cspec0, ior=eta, label="glass reflection")
+        closures.append(on(reflection))
+        t2 = sp.square(b, refraction_roughness)
+        refraction = _microfacet("refraction", sp.mul(b, base, final_transmission), refraction_roughness, t2, t2,
+                                 "ggx", ior=eta, label="refraction")
+        closures.append(_textured(off(refraction), texture, final_transmission, b))
 
     # Clearcoat: GTR1, dielectric Fresnel of index 1.5, weighted 0.25 x Clearcoat in Cycles' eval.
-    if clearcoat > WEIGHT_CUTOFF:
-        a = clearcoat_roughness ** 2
-        closures.append(Closure("reflection", (0.25 * clearcoat,) * 3, distribution="gtr1", fresnel="dielectric",
-                                alpha_x=a, alpha_y=a, ior=1.5, label="clearcoat"))
+    if positive(clearcoat, WEIGHT_CUTOFF):
+        a = sp.square(b, clearcoat_roughness)
+        closures.append(Closure("reflection", _rgb(b, sp.mul(b, 0.25, clearcoat)), distribution="gtr1",
+                                fresnel="dielectric", alpha_x=a, alpha_y=a, ior=1.5, label="clearcoat"))
         if node.inputs["Clearcoat Normal"].is_linked:
-            notes.append("clearcoat normal map ignored")
+            notes.append("clearcoat normal map ignored (the Normal input's used)")
 
-    emission = _scaled(inputs.color("Emission"), inputs.number("Emission Strength", 1.0))
+    emission = sp.mul(b, inputs.color("Emission"), inputs.number("Emission Strength", 1.0))
     return _with_alpha(Shader(closures, emission, summary="principled"), inputs.number("Alpha", 1.0), notes)
 
 
 def _principled_v2(node, stack, notes):
     """Principled BSDF v2 (Blender 4.x): the same closure kinds, its layering approximated."""
+    b = _program(notes)
     role = compat.principled_input
     inputs = _Inputs(node, stack, notes)
     base, texture = inputs.color_or_texture(role("base_color"))
-    metallic = _clamp01(inputs.number(role("metallic")))
-    roughness = _clamp01(inputs.number(role("roughness"), 0.5))
-    eta = max(inputs.number(role("ior"), 1.5), 1e-5)
-    transmission = _clamp01(inputs.number(role("transmission")))
-    subsurface = _clamp01(inputs.number(role("subsurface")))
-    level = max(inputs.number(role("specular_ior_level"), 0.5), 0.0)
-    specular_tint = _clamp_color(inputs.color(role("specular_tint")))
-    anisotropic = _clamp01(inputs.number(role("anisotropic")))
+    metallic = sp.clamp01(b, inputs.number(role("metallic")))
+    roughness = sp.clamp01(b, inputs.number(role("roughness"), 0.5))
+    eta = sp.clamp_min(b, inputs.number(role("ior"), 1.5), 1e-5)
+    transmission = sp.clamp01(b, inputs.number(role("transmission")))
+    subsurface = sp.clamp01(b, inputs.number(role("subsurface")))
+    level = sp.clamp_min(b, inputs.number(role("specular_ior_level"), 0.5), 0.0)
+    specular_tint = sp.clamp01(b, inputs.color(role("specular_tint")))
+    anisotropic = sp.clamp01(b, inputs.number(role("anisotropic")))
     rotation = inputs.number("Anisotropic Rotation")
-    coat = _clamp01(inputs.number(role("coat")))
-    sheen = max(inputs.number(role("sheen")), 0.0)
-    diffuse_roughness = _clamp01(inputs.optional_number(role("diffuse_roughness")))
+    coat = sp.clamp01(b, inputs.number(role("coat")))
+    sheen = sp.clamp_min(b, inputs.number(role("sheen")), 0.0)
+    diffuse_roughness = sp.clamp01(b, inputs.optional_number(role("diffuse_roughness")))
     distribution = getattr(node, "distribution", "GGX")
     dist = "ggx" if distribution == "GGX" else "multi_ggx"
-    _principled_common_notes(node, inputs, notes)
-    if inputs.optional_number(role("thin_film")) > 0.0:
+    if positive(inputs.optional_number(role("thin_film")), 0.0):
         notes.append("thin film ignored")
 
     closures = []
-    alpha_x, alpha_y = _principled_alphas(roughness, anisotropic)
+    alpha_x, alpha_y = _principled_alphas(b, roughness, anisotropic)
     # Coat on top of everything: a dielectric GGX reflection; what lies below loses what it reflects.
     below = 1.0
-    if coat > WEIGHT_CUTOFF:
-        coat_ior = max(inputs.number("Coat IOR", 1.5), 1.0)
-        coat_roughness = _clamp01(inputs.number(role("coat_roughness"), 0.03))
-        closures.append(_microfacet("reflection", (coat,) * 3, coat_roughness, coat_roughness ** 2,
-                                    coat_roughness ** 2, "ggx", fresnel="dielectric", ior=coat_ior, label="coat"))
-        below = 1.0 - coat * _f0(coat_ior)
-        tint = _clamp_color(inputs.color(role("coat_tint")))
+    if positive(coat, WEIGHT_CUTOFF):
+        coat_ior = sp.clamp_min(b, inputs.number("Coat IOR", 1.5), 1.0)
+        coat_roughness = sp.clamp01(b, inputs.number(role("coat_roughness"), 0.03))
+        c2 = sp.square(b, coat_roughness)
+        closures.append(_microfacet("reflection", _rgb(b, coat), coat_roughness, c2, c2, "ggx",
+                                    fresnel="dielectric", ior=coat_ior, label="coat"))
+        below = sp.one_minus(b, sp.mul(b, coat, _f0(b, coat_ior)))
+        tint = sp.clamp01(b, inputs.color(role("coat_tint")))
         if _is_tinted(tint):
             notes.append("Coat Tint applied at normal incidence only")
-        below_tint = _mix(WHITE, tint, coat)
+        below_tint = sp.lerp(b, WHITE, tint, coat)
         notes.append("coat layering approximated (layers below dimmed by the coat's normal reflectance)")
+        if "Coat Normal" in node.inputs and node.inputs["Coat Normal"].is_linked:
+            notes.append("coat normal map ignored (the Normal input's used)")
     else:
         below_tint = WHITE
 
     def under(weight_rgb):
-        return tuple(w * below * t for w, t in zip(weight_rgb, below_tint))
+        return sp.mul(b, sp.mul(b, weight_rgb, below), below_tint)
 
     # Metal: Schlick's Fresnel from Base Color (F82 with a white edge tint).
-    if metallic > WEIGHT_CUTOFF:
-        c = _microfacet("reflection", under((metallic,) * 3), roughness, alpha_x, alpha_y, dist,
-                        fresnel="schlick", specular_color=_clamp_color(base), label="metal")
+    if positive(metallic, WEIGHT_CUTOFF):
+        c = _microfacet("reflection", under(_rgb(b, metallic)), roughness, alpha_x, alpha_y, dist,
+                        fresnel="schlick", specular_color=sp.clamp01(b, base), label="metal")
         if texture is not None:
             c = replace(c, texture=texture, texture_target="specular_color")
         closures.append(c)
@@ -494,94 +649,145 @@ def _principled_v2(node, stack, notes):
             notes.append("Specular Tint of the metal ignored (F82 edge tint rendered white)")
 
     # The dielectric specular: F0 of the IOR scaled by 2 x Specular IOR Level, tinted by Specular Tint.
-    f0 = min(_f0(eta) * 2.0 * level, 0.999)
-    specular_ior = (1.0 + math.sqrt(f0)) / (1.0 - math.sqrt(f0))
-    dielectric = 1.0 - metallic
-    glass = dielectric * transmission
-    opaque = dielectric * (1.0 - transmission)
-    if opaque > WEIGHT_CUTOFF and f0 > 0.0:
-        closures.append(_microfacet("reflection", under((opaque,) * 3), roughness, alpha_x, alpha_y, dist,
-                                    fresnel="principled", specular_color=_scaled(specular_tint, f0),
+    f0 = sp.minimum(b, sp.mul(b, sp.mul(b, _f0(b, eta), 2.0), level), 0.999)
+    root = sp.sqrt(b, f0)
+    specular_ior = sp.divide(b, sp.add(b, 1.0, root), sp.one_minus(b, root))
+    dielectric = sp.one_minus(b, metallic)
+    glass = sp.mul(b, dielectric, transmission)
+    opaque = sp.mul(b, dielectric, sp.one_minus(b, transmission))
+    if positive(opaque, WEIGHT_CUTOFF) and positive(f0, 0.0):
+        closures.append(_microfacet("reflection", under(_rgb(b, opaque)), roughness, alpha_x, alpha_y, dist,
+                                    fresnel="principled", specular_color=sp.mul(b, specular_tint, f0),
                                     ior=specular_ior, label="specular"))
-    if glass > WEIGHT_CUTOFF:
-        fresnel = ("fresnel", eta)
-        glass_dist = "ggx"
+    if positive(glass, WEIGHT_CUTOFF):
         if dist != "ggx" and _is_rough(roughness):
             notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
-        closures.append(replace(
-            _microfacet("reflection", under((glass,) * 3), roughness, roughness ** 2, roughness ** 2, glass_dist,
-                        fresnel="schlick", specular_color=specular_tint, label="glass reflection"),
-            factors_on=(fresnel,)))
-        refraction = _microfacet("refraction", under(_scaled(base, glass)), roughness, roughness ** 2,
-                                 roughness ** 2, glass_dist, ior=eta, label="refraction")
-        closures.append(_textured(replace(refraction, factors_off=(fresnel,)), texture, glass * below))
+        on, off = _fresnel_split(b, notes, eta)
+        r2 = sp.square(b, roughness)
+        closures.append(on(_microfacet("reflection", under(_rgb(b, glass)), roughness, r2, r2, "ggx",
+                                       fresnel="schlick", specular_color=specular_tint, label="glass reflection")))
+        refraction = _microfacet("refraction", under(sp.mul(b, base, glass)), roughness, r2, r2, "ggx", ior=eta,
+                                 label="refraction")
+        closures.append(_textured(off(refraction), texture, sp.mul(b, glass, below), b))
 
     # Sheen over the diffuse base: velvet of Sheen Roughness.
-    if opaque > WEIGHT_CUTOFF and sheen > WEIGHT_CUTOFF:
-        sheen_tint = _clamp_color(inputs.color(role("sheen_tint")))
-        sheen_roughness = _clamp01(inputs.number("Sheen Roughness", 0.5))
-        closures.append(Closure("velvet", under(_scaled(sheen_tint, sheen * opaque)), roughness=sheen_roughness,
-                                label="sheen"))
+    if positive(opaque, WEIGHT_CUTOFF) and positive(sheen, WEIGHT_CUTOFF):
+        sheen_tint = sp.clamp01(b, inputs.color(role("sheen_tint")))
+        sheen_roughness = sp.clamp01(b, inputs.number("Sheen Roughness", 0.5))
+        closures.append(Closure("velvet", under(sp.mul(b, sheen_tint, sp.mul(b, sheen, opaque))),
+                                roughness=sheen_roughness, label="sheen"))
         notes.append("microfibre sheen rendered as velvet")
 
     # Diffuse base under the dielectric specular: dimmed by its normal reflectance.
-    if opaque > WEIGHT_CUTOFF:
-        if subsurface > WEIGHT_CUTOFF:
+    if positive(opaque, WEIGHT_CUTOFF):
+        if positive(subsurface, WEIGHT_CUTOFF):
             notes.append("subsurface rendered as diffuse")
-        weight = opaque * below * (1.0 - f0 * max(specular_tint))
-        c = Closure("diffuse", under(_scaled(base, opaque * (1.0 - f0 * max(specular_tint)))),
-                    roughness=diffuse_roughness, label="diffuse")
-        closures.append(_textured(c, texture, weight))
-        if f0 > 0.0:
+        dimmed = sp.mul(b, opaque, sp.one_minus(b, sp.mul(b, f0, sp.max_component(b, specular_tint))))
+        weight = sp.mul(b, sp.mul(b, opaque, below),
+                        sp.one_minus(b, sp.mul(b, f0, sp.max_component(b, specular_tint))))
+        c = Closure("diffuse", under(sp.mul(b, base, dimmed)), roughness=diffuse_roughness, label="diffuse")
+        closures.append(_textured(c, texture, weight, b))
+        if positive(f0, 0.0):
             notes.append("energy-conserving layering approximated (diffuse dimmed by the specular's normal "
                          "reflectance)")
-    if alpha_x != alpha_y and (metallic > WEIGHT_CUTOFF or opaque > WEIGHT_CUTOFF):
+    if (is_reg(anisotropic) or alpha_x != alpha_y) and (positive(metallic, WEIGHT_CUTOFF)
+                                                         or positive(opaque, WEIGHT_CUTOFF)):
         _note_rotation(notes, rotation, node.inputs["Tangent"].is_linked)
 
-    emission = _scaled(inputs.color(role("emission_color")), inputs.number(role("emission_strength"), 0.0))
+    emission = sp.mul(b, inputs.color(role("emission_color")), inputs.number(role("emission_strength"), 0.0))
     return _with_alpha(Shader(closures, emission, summary="principled"), inputs.number(role("alpha"), 1.0), notes)
 
 
-def _principled_common_notes(node, inputs, notes):
-    if node.inputs["Normal"].is_linked:
+def _shading_normal(node, stack, notes):
+    """A shader node's Normal input driven by nodes: the material's shading normal (one per material; a program
+    output). Without node programs it is ignored, with a note."""
+    socket = node.inputs.get("Normal")
+    if socket is None or not socket.is_linked:
+        return
+    b = _program(notes)
+    if b is None:
         notes.append("normal/bump map ignored")
+        return
+    out, _, _ = follow(socket, stack)
+    if out is None:
+        return
+    normal = b.value_of(socket, stack)
+    if is_const(normal):
+        normal = b.constant(normal)
+    if notes.normal is None:
+        notes.normal = normal
+    elif notes.normal != normal:
+        notes.append(f"{node.bl_label}'s own Normal input ignored (one shading normal per material: the first "
+                     "one used)")
 
 
-def _principled_alphas(roughness, anisotropic):
+def _rgb(b, weight):
+    """A scalar weight as an RGB weight."""
+    return sp.as_vector(b, weight) if is_reg(weight) else (weight,) * 3
+
+
+def _fresnel_split(b, notes, eta):
+    """Two closure transforms (reflected part, refracted part) splitting by a dielectric Fresnel factor of `eta`: a
+    view-dependent factor for a constant IOR, a fresnel op weighting the two otherwise."""
+    if is_const(eta):
+        key = ("fresnel", eta)
+        return (lambda c: replace(c, factors_on=c.factors_on + (key,)),
+                lambda c: replace(c, factors_off=c.factors_off + (key,)))
+    normal = notes.normal if notes.normal is not None else b.emit("geometry", [0], [])[1]
+    f = b.emit("fresnel", [], [eta, normal])[0]
+    rest = sp.one_minus(b, f)
+    return (lambda c: replace(c, color=sp.mul(b, c.color, f)),
+            lambda c: replace(c, color=sp.mul(b, c.color, rest)))
+
+
+def _principled_alphas(b, roughness, anisotropic):
     """Cycles' Principled anisotropy: aspect = sqrt(1 - 0.9 anisotropic), alphas r^2 / aspect and r^2 x aspect."""
-    aspect = math.sqrt(max(1.0 - anisotropic * 0.9, 1e-6))
-    r2 = roughness * roughness
-    return min(r2 / aspect, 1.0), r2 * aspect
+    if is_const(roughness) and is_const(anisotropic):
+        aspect = math.sqrt(max(1.0 - anisotropic * 0.9, 1e-6))
+        r2 = roughness * roughness
+        return min(r2 / aspect, 1.0), r2 * aspect
+    aspect = sp.sqrt(b, sp.clamp_min(b, sp.sub(b, 1.0, sp.mul(b, anisotropic, 0.9)), 1e-6))
+    r2 = sp.square(b, roughness)
+    return sp.minimum(b, sp.divide(b, r2, aspect), 1.0), sp.mul(b, r2, aspect)
 
 
 def _with_alpha(shader, alpha, notes):
     """Alpha < 1: a transparent closure of weight 1 - alpha over the shader scaled by alpha (Cycles' mix)."""
-    alpha = _clamp01(alpha)
-    if alpha >= 1.0:
+    b = _program(notes)
+    alpha = sp.clamp01(b, alpha)
+    if is_const(alpha) and alpha >= 1.0:
         return shader
-    result = shader.scaled(alpha)
-    result.closures.append(Closure("transparent", (1.0 - alpha,) * 3, label="transparent"))
+    result = shader.scaled(alpha, b)
+    result.closures.append(Closure("transparent", _rgb(b, sp.one_minus(b, alpha)), label="transparent"))
     return result
 
 
-def _textured(closure, texture, weight):
+def _textured(closure, texture, weight, b=None):
     """`closure` with `texture` multiplying its colour: the colour is then the scalar weight."""
     if texture is None:
         return closure
-    return replace(closure, texture=texture, texture_target="color", color=(weight,) * 3)
+    return replace(closure, texture=texture, texture_target="color", color=_rgb(b, weight))
 
 
 def _microfacet(kind, color, roughness, alpha_x, alpha_y, distribution, fresnel="none", specular_color=BLACK,
                 ior=1.45, label=""):
-    """A reflection or refraction closure; sharp when the Blender roughness is at most ROUGHNESS_SHARP."""
+    """A reflection or refraction closure; sharp when the Blender roughness is at most ROUGHNESS_SHARP (never when
+    the roughness is programmed)."""
     if distribution == "sharp" or not _is_rough(roughness):
         distribution, alpha_x, alpha_y = "sharp", 0.0, 0.0
-    return Closure(kind, tuple(color), distribution=distribution, fresnel=fresnel,
-                   specular_color=tuple(specular_color), alpha_x=alpha_x, alpha_y=alpha_y, ior=ior, label=label)
+    return Closure(kind, _tuple(color), distribution=distribution, fresnel=fresnel,
+                   specular_color=_tuple(specular_color), alpha_x=alpha_x, alpha_y=alpha_y, ior=ior, label=label)
+
+
+def _tuple(value):
+    return value if is_reg(value) else tuple(value)
 
 
 def _is_rough(roughness):
-    """roughness > ROUGHNESS_SHARP as the core decides it, in float32: Blender stores 0.05 as 0.0500000007."""
+    """roughness > ROUGHNESS_SHARP as the core decides it, in float32: Blender stores 0.05 as 0.0500000007. A
+    programmed roughness is rough."""
+    if is_reg(roughness):
+        return True
     return bool(np.float32(roughness) > np.float32(ROUGHNESS_SHARP))
 
 
@@ -597,17 +803,26 @@ def _distribution(node, notes):
     return _DISTRIBUTIONS.get(name, "ggx")
 
 
-def _anisotropic_alphas(roughness, anisotropy):
+def _anisotropic_alphas(b, roughness, anisotropy):
     """Cycles' Glossy/Anisotropic BSDF: alpha = r^2 stretched by the anisotropy in (-0.99, 0.99)."""
-    a = roughness * roughness
-    anisotropy = min(max(anisotropy, -0.99), 0.99)
-    if anisotropy < 0.0:
-        return a / (1.0 + anisotropy), a * (1.0 + anisotropy)
-    return a * (1.0 - anisotropy), a / (1.0 - anisotropy)
+    if is_const(roughness) and is_const(anisotropy):
+        a = roughness * roughness
+        anisotropy = min(max(anisotropy, -0.99), 0.99)
+        if anisotropy < 0.0:
+            return a / (1.0 + anisotropy), a * (1.0 + anisotropy)
+        return a * (1.0 - anisotropy), a / (1.0 - anisotropy)
+    a = sp.square(b, roughness)
+    if is_const(anisotropy) and anisotropy == 0.0:
+        return a, a
+    anisotropy = sp.maximum(b, sp.minimum(b, anisotropy, 0.99), -0.99)
+    s = sp.one_minus(b, sp.math_op(b, "ABSOLUTE", anisotropy))
+    shrunk, stretched = sp.mul(b, a, s), sp.divide(b, a, s)
+    negative = sp.math_op(b, "LESS_THAN", anisotropy, 0.0)
+    return sp.lerp(b, shrunk, stretched, negative), sp.lerp(b, stretched, shrunk, negative)
 
 
 def _note_rotation(notes, rotation, tangent_linked):
-    if rotation != 0.0:
+    if is_reg(rotation) or rotation != 0.0:
         notes.append("anisotropic rotation approximated (the core's tangent runs around the object's Z axis)")
     if tangent_linked:
         notes.append("Tangent input ignored (the core's tangent runs around the object's Z axis)")
@@ -615,20 +830,23 @@ def _note_rotation(notes, rotation, tangent_linked):
 
 def _glossy(node, stack, notes):
     """Glossy BSDF (3.4), Anisotropic BSDF (3.4) and 4.x's Glossy (one node): reflection without Fresnel."""
+    b = _program(notes)
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
-    roughness = _clamp01(inputs.number("Roughness", 0.5))
+    roughness = sp.clamp01(b, inputs.number("Roughness", 0.5))
     distribution = _distribution(node, notes)
-    alpha_x = alpha_y = roughness * roughness
+    alpha_x = alpha_y = sp.square(b, roughness)
     if "Anisotropy" in node.inputs:
-        alpha_x, alpha_y = _anisotropic_alphas(roughness, inputs.number("Anisotropy"))
-        if alpha_x != alpha_y:
+        anisotropy = inputs.number("Anisotropy")
+        alpha_x, alpha_y = _anisotropic_alphas(b, roughness, anisotropy)
+        if is_reg(anisotropy) or alpha_x != alpha_y:
             _note_rotation(notes, inputs.number("Rotation"), node.inputs["Tangent"].is_linked)
-    c = _microfacet("reflection", color, roughness, min(alpha_x, 1.0), min(alpha_y, 1.0), distribution,
-                    label="glossy")
+    c = _microfacet("reflection", color, roughness, sp.minimum(b, alpha_x, 1.0), sp.minimum(b, alpha_y, 1.0),
+                    distribution, label="glossy")
     if c.distribution == "multi_ggx":
         # Cycles' random walk tints every bounce after the first by the colour again.
-        c = replace(c, specular_color=_clamp_color(color))
+        c = replace(c, specular_color=sp.clamp01(b, color))
     summary = "glossy" if c.distribution != "sharp" else "mirror"
     return Shader([_textured_color(c, texture, color)], summary=summary)
 
@@ -643,70 +861,84 @@ def _textured_color(closure, texture, color):
 def _metallic(node, stack, notes):
     """Metallic BSDF (Blender 4.3 and later): Schlick's Fresnel from Base Color (F82 mode) or from a physical
     conductor's normal reflectance ((n-1)^2 + k^2) / ((n+1)^2 + k^2) per channel."""
+    b = _program(notes)
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
-    roughness = _clamp01(inputs.number("Roughness", 0.5))
+    roughness = sp.clamp01(b, inputs.number("Roughness", 0.5))
     texture = None
     if getattr(node, "fresnel_type", "F82") == "PHYSICAL_CONDUCTOR":
         n = inputs.color("IOR")
         k = inputs.color("Extinction")
-        color = tuple(((a - 1.0) ** 2 + b * b) / ((a + 1.0) ** 2 + b * b) for a, b in zip(n, k))
+        k2 = sp.mul(b, k, k)
+        color = sp.divide(b, sp.add(b, sp.square(b, sp.sub(b, n, WHITE)), k2),
+                          sp.add(b, sp.square(b, sp.add(b, n, WHITE)), k2))
         notes.append("conductor Fresnel rendered as Schlick's from its normal-incidence reflectance")
     else:
         color, texture = inputs.color_or_texture("Base Color")
         if _is_tinted(inputs.color("Edge Tint")):
             notes.append("Edge Tint ignored (F82 edge rendered white)")
-    alpha_x, alpha_y = _anisotropic_alphas(roughness, inputs.number("Anisotropy"))
-    if alpha_x != alpha_y:
+    anisotropy = inputs.number("Anisotropy")
+    alpha_x, alpha_y = _anisotropic_alphas(b, roughness, anisotropy)
+    if is_reg(anisotropy) or alpha_x != alpha_y:
         _note_rotation(notes, inputs.number("Rotation"), node.inputs["Tangent"].is_linked)
-    c = _microfacet("reflection", WHITE, roughness, min(alpha_x, 1.0), min(alpha_y, 1.0),
-                    _distribution(node, notes), fresnel="schlick", specular_color=_clamp_color(color),
+    c = _microfacet("reflection", WHITE, roughness, sp.minimum(b, alpha_x, 1.0), sp.minimum(b, alpha_y, 1.0),
+                    _distribution(node, notes), fresnel="schlick", specular_color=sp.clamp01(b, color),
                     label="metal")
     if texture is not None:
         c = replace(c, texture=texture, texture_target="specular_color")
     return Shader([c], summary="metal")
 
 
+def _ior_text(eta):
+    return "programmed IOR" if is_reg(eta) else f"IOR {eta:.2f}"
+
+
 def _glass(node, stack, notes):
     """Glass BSDF: reflection and refraction split by a Fresnel factor of its IOR (Cycles' Glass)."""
+    b = _program(notes)
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
-    roughness = _clamp01(inputs.number("Roughness"))
-    eta = max(inputs.number("IOR", 1.45), 1e-5)
+    roughness = sp.clamp01(b, inputs.number("Roughness"))
+    eta = sp.clamp_min(b, inputs.number("IOR", 1.45), 1e-5)
     distribution = _distribution(node, notes)
     if distribution == "multi_ggx":
         if _is_rough(roughness):
             notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
         distribution = "ggx"
-    a = roughness * roughness
-    fresnel = ("fresnel", eta)
+    a = sp.square(b, roughness)
+    on, off = _fresnel_split(b, notes, eta)
     reflection = _microfacet("reflection", color, roughness, a, a, distribution, ior=eta, label="reflection")
     refraction = _microfacet("refraction", color, roughness, a, a, distribution, ior=eta, label="refraction")
-    closures = [replace(_textured_color(reflection, texture, color), factors_on=(fresnel,)),
-                replace(_textured_color(refraction, texture, color), factors_off=(fresnel,))]
-    summary = f"glass, IOR {eta:.2f}" + (", rough" if reflection.distribution != "sharp" else "")
+    closures = [on(_textured_color(reflection, texture, color)), off(_textured_color(refraction, texture, color))]
+    summary = f"glass, {_ior_text(eta)}" + (", rough" if reflection.distribution != "sharp" else "")
     return Shader(closures, summary=summary)
 
 
 def _refraction(node, stack, notes):
     """Refraction BSDF: refraction only, no Fresnel, no reflection."""
+    b = _program(notes)
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
-    roughness = _clamp01(inputs.number("Roughness"))
-    eta = max(inputs.number("IOR", 1.45), 1e-5)
-    a = roughness * roughness
+    roughness = sp.clamp01(b, inputs.number("Roughness"))
+    eta = sp.clamp_min(b, inputs.number("IOR", 1.45), 1e-5)
+    a = sp.square(b, roughness)
     c = _microfacet("refraction", color, roughness, a, a, _distribution(node, notes), ior=eta, label="refraction")
-    return Shader([_textured_color(c, texture, color)], summary=f"refraction, IOR {eta:.2f}")
+    return Shader([_textured_color(c, texture, color)], summary=f"refraction, {_ior_text(eta)}")
 
 
 def _diffuse(node, stack, notes):
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
-    roughness = _clamp01(inputs.number("Roughness"))
+    roughness = sp.clamp01(_program(notes), inputs.number("Roughness"))
     c = Closure("diffuse", color, roughness=roughness, label="diffuse")
     return Shader([_textured_color(c, texture, color)], summary="diffuse")
 
 
 def _translucent(node, stack, notes):
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
     return Shader([_textured_color(Closure("translucent", color, label="translucent"), texture, color)],
@@ -719,9 +951,10 @@ def _transparent(node, stack, notes):
 
 
 def _velvet(node, stack, notes):
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
-    sigma = _clamp01(inputs.number("Sigma" if "Sigma" in node.inputs else "Roughness", 1.0))
+    sigma = sp.clamp01(_program(notes), inputs.number("Sigma" if "Sigma" in node.inputs else "Roughness", 1.0))
     if getattr(node, "distribution", "ASHIKHMIN") == "MICROFIBER":
         notes.append("microfibre sheen rendered as velvet")
     return Shader([_textured_color(Closure("velvet", color, roughness=sigma, label="velvet"), texture, color)],
@@ -729,6 +962,7 @@ def _velvet(node, stack, notes):
 
 
 def _subsurface(node, stack, notes):
+    _shading_normal(node, stack, notes)
     inputs = _Inputs(node, stack, notes)
     color, texture = inputs.color_or_texture("Color")
     notes.append("subsurface rendered as diffuse")
@@ -738,7 +972,7 @@ def _subsurface(node, stack, notes):
 
 def _emission(node, stack, notes):
     inputs = _Inputs(node, stack, notes)
-    radiance = _scaled(inputs.color("Color"), inputs.number("Strength", 1.0))
+    radiance = sp.mul(_program(notes), inputs.color("Color"), inputs.number("Strength", 1.0))
     return Shader([], radiance, summary="emission")
 
 
@@ -748,17 +982,18 @@ def _holdout(node, stack, notes):
 
 def _mix_shader(node, stack, notes):
     # Inputs 1 and 2 are the two shader sockets (both are called "Shader").
+    b = _program(notes)
     first = _convert_socket(node.inputs[1], stack, notes)
     second = _convert_socket(node.inputs[2], stack, notes)
     factor = _view_factor(node.inputs["Fac"], stack, notes)
     if factor is None:
-        fac = _clamp01(_Inputs(node, stack, notes).number("Fac", 0.5))
-        combined = _add(first.scaled(1.0 - fac), second.scaled(fac))
+        fac = sp.clamp01(b, _Inputs(node, stack, notes).number("Fac", 0.5))
+        combined = _add(first.scaled(sp.one_minus(b, fac), b), second.scaled(fac, b), b)
     else:
         at_normal = _factor_at_normal_incidence(factor)
         a = _with_factor(first, factor, off=True, at_normal=1.0 - at_normal, notes=notes)
-        b = _with_factor(second, factor, off=False, at_normal=at_normal, notes=notes)
-        combined = _add(a, b)
+        b_ = _with_factor(second, factor, off=False, at_normal=at_normal, notes=notes)
+        combined = _add(a, b_, b)
     combined.summary = _mix_summary("mix", first, second)
     return combined
 
@@ -766,7 +1001,7 @@ def _mix_shader(node, stack, notes):
 def _add_shader(node, stack, notes):
     first = _convert_socket(node.inputs[0], stack, notes)
     second = _convert_socket(node.inputs[1], stack, notes)
-    combined = _add(first, second)
+    combined = _add(first, second, _program(notes))
     combined.summary = _mix_summary("add", first, second)
     return combined
 
@@ -780,9 +1015,8 @@ def _mix_summary(what, first, second):
     return f"{what} of " + " and ".join(parts) if parts else ""
 
 
-def _add(a, b):
-    return Shader(a.closures + b.closures, tuple(x + y for x, y in zip(a.emission, b.emission)),
-                  a.holdout + b.holdout)
+def _add(a, c, b=None):
+    return Shader(a.closures + c.closures, sp.add(b, a.emission, c.emission), sp.add(b, a.holdout, c.holdout))
 
 
 def _with_factor(shader, factor, off, at_normal, notes):
@@ -799,13 +1033,16 @@ def _with_factor(shader, factor, off, at_normal, notes):
             closures.append(replace(c, factors_off=c.factors_off + (factor,)))
         else:
             closures.append(replace(c, factors_on=c.factors_on + (factor,)))
-    if any(e > 0.0 for e in shader.emission) or shader.holdout > 0.0:
+    if positive(shader.emission, 0.0) or positive(shader.holdout, 0.0):
         notes.append("view-dependent mix factor above an emission or holdout evaluated at normal incidence")
-    return Shader(closures, _scaled(shader.emission, at_normal), shader.holdout * at_normal, shader.summary)
+    b = _program(notes)
+    return Shader(closures, sp.mul(b, shader.emission, at_normal), sp.mul(b, shader.holdout, at_normal),
+                  shader.summary)
 
 
 def _view_factor(socket, stack, notes):
-    """The (kind, value) key of a Fresnel or Layer Weight node driving a Mix Shader's Fac, or None."""
+    """The (kind, value) key of a Fresnel or Layer Weight node of constant IOR or Blend driving a Mix Shader's Fac,
+    or None (with node programs, a computed IOR or Blend, or a linked Normal, compiles the node instead)."""
     out, _, inner = follow(socket, stack)
     if out is None:
         return None
@@ -816,9 +1053,12 @@ def _view_factor(socket, stack, notes):
         kind, value_name = ("layer_fresnel" if out.name == "Fresnel" else "layer_facing"), "Blend"
     else:
         return None
+    programs = _program(notes) is not None
+    if programs and node.inputs["Normal"].is_linked:
+        return None
     value_out, value_socket, _ = follow(node.inputs[value_name], inner)
     if value_out is not None and value_out.node.bl_idname != "ShaderNodeValue":
-        return None                        # a computed IOR or Blend: the Fac's constant value, noted
+        return None                        # a computed IOR or Blend: compiled, or the Fac's constant value, noted
     value = value_out.default_value if value_out is not None else value_socket.default_value
     value = float(value)
     if not math.isfinite(value):
@@ -853,8 +1093,10 @@ def _factor_at_normal_incidence(key):
     return 0.0                             # layer_facing: 1 - cos^k is 0 facing the viewer
 
 
-def _f0(ior):
-    return ((ior - 1.0) / (ior + 1.0)) ** 2
+def _f0(b, ior):
+    if is_const(ior):
+        return ((ior - 1.0) / (ior + 1.0)) ** 2
+    return sp.square(b, sp.divide(b, sp.sub(b, ior, 1.0), sp.add(b, ior, 1.0)))
 
 
 def _unsupported_shader(node, stack, notes):
@@ -904,10 +1146,14 @@ def _by_identifier(sockets, identifier):
     return None
 
 
+_NEVER_MUTED = {"NodeReroute", "NodeGroupInput", "NodeGroupOutput", "NodeFrame"}
+
+
 def follow(socket, stack=()):
-    """What feeds the input `socket`: (output socket or None, the input socket whose own value applies when there
-    is none, the group nodes we are inside). Looks through reroutes, into node groups (to their Group Output) and
-    back out of them (a Group Input socket leads to the Group node's input). Muted links count as unconnected."""
+    """What feeds the input `socket`: (output socket or None, the socket whose own value applies when there is
+    none, the group nodes we are inside). Looks through reroutes, muted nodes (their internal links), into node
+    groups (to their Group Output) and back out of them (a Group Input socket leads to the Group node's input).
+    Muted links count as unconnected."""
     for _ in range(1000):
         if not socket.is_linked:
             return None, socket, stack
@@ -915,7 +1161,13 @@ def follow(socket, stack=()):
         if getattr(link, "is_muted", False) or not getattr(link, "is_valid", True):
             return None, socket, stack
         out, node = link.from_socket, link.from_node
-        if node.bl_idname == "NodeReroute":
+        if getattr(node, "mute", False) and node.bl_idname not in _NEVER_MUTED:
+            # A muted node passes its internal links through; an output without one has its own value.
+            internal = next((l for l in node.internal_links if l.to_socket.identifier == out.identifier), None)
+            if internal is None:
+                return None, out, stack
+            socket = internal.from_socket
+        elif node.bl_idname == "NodeReroute":
             socket = node.inputs[0]
         elif node.bl_idname == "ShaderNodeGroup":
             group_output = _group_output(node.node_tree) if node.node_tree is not None else None
@@ -940,10 +1192,12 @@ def source_node(socket):
 
 
 class _Inputs:
-    """A node's inputs read as constants, inside the group nesting `stack`; notes what is not."""
+    """A node's inputs inside the group nesting `stack`: Values (constants or program registers) when the material
+    has a ProgramBuilder; otherwise constants, noting the inputs driven by nodes."""
 
     def __init__(self, node, stack, notes):
         self.node, self.stack, self.notes = node, stack, notes
+        self.program = _program(notes)
 
     def value(self, name):
         socket = self.node.inputs[name]
@@ -958,7 +1212,12 @@ class _Inputs:
     def number(self, name, default=0.0):
         if name is None or name not in self.node.inputs:
             return default
-        value = self.value(name)
+        if self.program is not None:
+            value = self.program.value_of(self.node.inputs[name], self.stack)
+            if is_reg(value):
+                return value if value.type == "f" else self.program.convert(value, "vector", "f")
+        else:
+            value = self.value(name)
         if isinstance(value, (int, float)):
             value = float(value)
         else:
@@ -974,7 +1233,13 @@ class _Inputs:
     def color(self, name, default=DEFAULT_COLOR):
         if name is None or name not in self.node.inputs:
             return default
-        rgb = _color(self.value(name))
+        if self.program is not None:
+            value = self.program.value_of(self.node.inputs[name], self.stack)
+            if is_reg(value):
+                return value if value.type == "v" else self.program.convert(value, "f", "color")
+            rgb = _color(value)
+        else:
+            rgb = _color(self.value(name))
         if not all(math.isfinite(c) for c in rgb):
             self.notes.append(f"'{name}' is not a number: default used")
             return default
@@ -984,10 +1249,22 @@ class _Inputs:
         """(colour, TextureRef or None): an Image Texture node plugged in becomes a texture the core looks up at
         the hit's UV; anything else is read as color() does. Colours are clamped to [0, 1]."""
         out, _, _ = follow(self.node.inputs[name], self.stack)
-        if out is not None and out.node.bl_idname == "ShaderNodeTexImage":
+        if out is not None and out.node.bl_idname == "ShaderNodeTexImage" and (self.program is None
+                                                                              or _plain_image(out)):
             reference, color = textures.texture_reference(out.node, self.notes)
             return color, reference
-        return _clamped_color(self.color(name), self.notes), None
+        value = self.color(name)
+        if is_reg(value):
+            return value, None
+        return _clamped_color(value, self.notes), None
+
+
+def _plain_image(out):
+    """An Image Texture's Color output with Cycles' defaults (UV map, Linear, Repeat, flat), which the core
+    looks up as a closure texture; any other Image Texture use is compiled into the node program."""
+    node = out.node
+    return (out.identifier == "Color" and node.image is not None and not node.inputs["Vector"].is_linked
+            and node.interpolation == 'Linear' and node.extension == 'REPEAT' and node.projection == 'FLAT')
 
 
 def _input_value(node, socket_name, notes):
@@ -1024,22 +1301,17 @@ def _clamp_color(rgb):
     return tuple(_clamp01(c) for c in rgb)
 
 
-def _hue(rgb, weights):
-    """Colour over its luminance (hue and saturation alone), white for black: Cycles' m_ctint."""
+def _hue(b, rgb, weights):
+    """Colour over its luminance (hue and saturation alone), white for black: Cycles' m_ctint (a programmed
+    colour: black for black, the vector_math divide being safe)."""
+    if is_reg(rgb):
+        return sp.divide(b, rgb, sp.dot(b, rgb, weights))
     lum = sum(w * c for w, c in zip(weights, rgb))
     return tuple(c / lum for c in rgb) if lum > 0.0 else WHITE
 
 
 def _is_tinted(rgb):
-    return any(abs(c - 1.0) > 1e-6 for c in rgb)
-
-
-def _scaled(rgb, factor):
-    return tuple(c * factor for c in rgb)
-
-
-def _mix(a, b, t):
-    return tuple((1.0 - t) * x + t * y for x, y in zip(a, b))
+    return is_reg(rgb) or any(abs(c - 1.0) > 1e-6 for c in rgb)
 
 
 def _clamp01(value):

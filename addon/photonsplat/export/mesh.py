@@ -5,7 +5,7 @@ take a fraction of a second. Meshes are exported in object space, once per disti
 object or instance showing it becomes a core instance with its own world matrix (export/sync.py).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -26,6 +26,27 @@ class TriangleMesh:
     normals: np.ndarray        # float32 (M, 3, 3), shading normal of each triangle corner (split normals)
     slots: np.ndarray          # int32 (M,), material slot index of each triangle
     uvs: np.ndarray = None     # float32 (M, 3, 2), the render UV map at each triangle corner; None without one
+    # What node programs read (only when some material's program does, MeshNeeds): attribute name -> float32
+    # (N, k) per vertex or (M, 3, k) per triangle corner, k 1..4; "" is the default colour attribute.
+    attributes: dict = field(default_factory=dict)
+    texspace: tuple = None     # ((location), (size)): Generated coordinates' texture space
+    missing: tuple = ()        # attribute names looked for that the mesh does not have
+
+    def provides(self, needs):
+        """Whether these arrays hold what `needs` asks for (attributes a mesh lacks are not looked for again)."""
+        looked_up = set(self.attributes) | set(self.missing)
+        return set(needs.attributes) <= looked_up and (self.texspace is not None or not needs.texspace)
+
+
+@dataclass(frozen=True)
+class MeshNeeds:
+    """What the materials of a mesh's objects read from it besides triangles, normals and the UV map."""
+    attributes: tuple = ()     # attribute names, sorted
+    texspace: bool = False
+
+    def __or__(self, other):
+        return MeshNeeds(tuple(sorted(set(self.attributes) | set(other.attributes))),
+                         self.texspace or other.texspace)
 
 
 def needs_to_mesh(instance):
@@ -37,22 +58,23 @@ def needs_to_mesh(instance):
     return instance.object.type in CONVERTIBLE_TYPES and instance.particle_system is not None
 
 
-def triangle_mesh(ob_eval):
-    """Triangles of an evaluated object (modifiers applied), or None if it has no faces."""
+def triangle_mesh(ob_eval, needs=MeshNeeds()):
+    """Triangles of an evaluated object (modifiers applied), or None if it has no faces; with the attributes and
+    texture space `needs` asks for."""
     if ob_eval.type == 'MESH':
         # The evaluated object's data already is the final mesh: no copy, no to_mesh() needed.
-        return _from_mesh(ob_eval.data)
+        return _from_mesh(ob_eval.data, needs)
     try:
         mesh = ob_eval.to_mesh()
     except RuntimeError:
         return None
     try:
-        return None if mesh is None else _from_mesh(mesh)
+        return None if mesh is None else _from_mesh(mesh, needs)
     finally:
         ob_eval.to_mesh_clear()
 
 
-def _from_mesh(mesh):
+def _from_mesh(mesh, needs=MeshNeeds()):
     mesh.calc_loop_triangles()
     count = len(mesh.loop_triangles)
     if count == 0:
@@ -71,8 +93,78 @@ def _from_mesh(mesh):
     normals = np.empty(count * 9, dtype=np.float32)
     mesh.loop_triangles.foreach_get("split_normals", normals)
 
-    return TriangleMesh(vertices=vertices.reshape(-1, 3), triangles=triangles.reshape(-1, 3),
-                        normals=normals.reshape(-1, 3, 3), slots=slots, uvs=_corner_uvs(mesh, count))
+    result = TriangleMesh(vertices=vertices.reshape(-1, 3), triangles=triangles.reshape(-1, 3),
+                          normals=normals.reshape(-1, 3, 3), slots=slots, uvs=_corner_uvs(mesh, count))
+    missing = []
+    for name in needs.attributes:
+        array = attribute_array(mesh, name, count)
+        if array is None:
+            missing.append(name)       # Cycles reads 0 for an attribute a mesh does not have; so does the core
+        else:
+            result.attributes[name] = array
+    result.missing = tuple(missing)
+    if needs.texspace:
+        result.texspace = (tuple(float(c) for c in mesh.texspace_location),
+                           tuple(float(c) for c in mesh.texspace_size))
+    return result
+
+
+# Generic attribute data types: (foreach_get property, components, numpy type).
+_ATTRIBUTE_TYPES = {"FLOAT": ("value", 1, np.float32), "INT": ("value", 1, np.int32),
+                    "INT8": ("value", 1, np.int32), "BOOLEAN": ("value", 1, bool),
+                    "FLOAT2": ("vector", 2, np.float32), "FLOAT_VECTOR": ("vector", 3, np.float32),
+                    "FLOAT_COLOR": ("color", 4, np.float32), "BYTE_COLOR": ("color", 4, np.float32)}
+
+
+def default_color_name(mesh):
+    """The colour attribute Cycles' Color Attribute node reads when it names none (the render colour)."""
+    attributes = getattr(mesh, "color_attributes", None)
+    if attributes is None or len(attributes) == 0:
+        return None
+    name = getattr(attributes, "default_color_name", "") or ""
+    if not name:
+        index = getattr(attributes, "render_color_index", -1)
+        if 0 <= index < len(attributes):
+            name = attributes[index].name
+    if not name and attributes.active_color is not None:
+        name = attributes.active_color.name
+    return name or None
+
+
+def attribute_array(mesh, name, count):
+    """Attribute `name` of `mesh` as float32 (vertices, k) or (triangles, 3, k); None if the mesh has none
+    ("" is the default colour attribute). UV maps by name are (triangles, 3, 2)."""
+    if name == "":
+        name = default_color_name(mesh)
+        if name is None:
+            return None
+    layer = mesh.uv_layers.get(name)
+    if layer is not None:
+        per_loop = np.empty(len(mesh.loops) * 2, dtype=np.float32)
+        layer.data.foreach_get("uv", per_loop)
+        return _per_corner(mesh, per_loop.reshape(-1, 2), count)
+    attribute = mesh.attributes.get(name)
+    if attribute is None or attribute.data_type not in _ATTRIBUTE_TYPES:
+        return None
+    prop, k, dtype = _ATTRIBUTE_TYPES[attribute.data_type]
+    values = np.empty(len(attribute.data) * k, dtype=dtype)
+    attribute.data.foreach_get(prop, values)
+    values = values.astype(np.float32).reshape(-1, k)
+    if attribute.domain == 'POINT':
+        return values
+    if attribute.domain == 'CORNER':
+        return _per_corner(mesh, values, count)
+    if attribute.domain == 'FACE':
+        polygons = np.empty(count, dtype=np.int32)
+        mesh.loop_triangles.foreach_get("polygon_index", polygons)
+        return np.repeat(values[polygons][:, None, :], 3, axis=1)
+    return None                        # edge attributes: nothing a surface point reads
+
+
+def _per_corner(mesh, per_loop, count):
+    loops = np.empty(count * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("loops", loops)
+    return np.ascontiguousarray(per_loop[loops].reshape(count, 3, -1))
 
 
 def _corner_uvs(mesh, count):

@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import settings as settings_table
 from . import camera, lights, mesh, world
-from .instancing import GeometryTable, MaterialTable, instance_name, placement, unique
+from .instancing import GeometryTable, MaterialTable, instance_name, mesh_needs, placement, unique
 
 # Notes beyond this many are summarised in one line: a scene with 500 odd materials should not bury the report.
 MAX_WARNINGS_SHOWN = 20
@@ -95,10 +95,10 @@ class _Build:
     """A new core Scene being filled: materials, meshes and instances as placements come (lights and the world
     are added by BlenderSync once the depsgraph walk is over)."""
 
-    def __init__(self, core):
+    def __init__(self, core, specs=None):
         self.scene = core.Scene()
         self.material_notes = []
-        self.materials = MaterialTable(self.scene, self.material_notes)
+        self.materials = MaterialTable(self.scene, self.material_notes, specs)
         self.geometry = GeometryTable(self.scene, self.materials)
         self.instance_ids = {}       # instance name -> core instance id
         self.triangles = 0           # triangles in the world, every instance counted
@@ -128,6 +128,7 @@ class BlenderSync:
         self._background = None
         self._world_notes = []
         self._materials_dirty = False
+        self._specs = {}             # material name -> MaterialSpec, converted again when materials change
         # Totals since creation, for the stats line and the tests.
         self.mesh_exports = 0        # meshes read from Blender
         self.light_exports = 0       # times the lights were replaced
@@ -149,8 +150,10 @@ class BlenderSync:
     def _sync(self, depsgraph, release):
         report = SyncReport()
         # The first sync builds its scene during the walk; later ones know only at its end whether they must.
-        build = _Build(self.core) if self.scene is None else None
+        build = _Build(self.core, self._specs) if self.scene is None else None
         dirty_objects, dirty_data = self._dirty(depsgraph) if build is None else (set(), set())
+        if self._materials_dirty:
+            self._specs.clear()
         placements, recorder, light_notes, object_notes = [], _CallRecorder(), [], []
         known_objects = {signature[0] for signature, _ in self._layout.values()}
         for instance in depsgraph.object_instances:
@@ -164,14 +167,17 @@ class BlenderSync:
             elif ob.type == 'MESH' or mesh.needs_to_mesh(instance):
                 where = placement(instance)
                 if build is not None:
-                    build.add(where, lambda: self._mesh_arrays(ob, where.mesh_key, report))
+                    build.add(where, lambda needs: self._mesh_arrays(ob, where.mesh_key, report, needs))
                 else:
                     generator = instance.parent.original.name_full if instance.is_instance else None
                     dirty = (where.object_name in dirty_objects or generator in dirty_objects
                              or where.object_name not in known_objects
                              or (ob.data is not None and ob.data.name_full in dirty_data))
-                    if dirty or where.mesh_key not in self._arrays:
-                        self._mesh_arrays(ob, where.mesh_key, report)
+                    needs = mesh_needs(self._specs, where)
+                    kept = self._arrays.get(where.mesh_key)
+                    if dirty or where.mesh_key not in self._arrays or (kept is not None
+                                                                       and not kept.provides(needs)):
+                        self._mesh_arrays(ob, where.mesh_key, report, needs)
                 placements.append(where)
             elif ob.type in mesh.UNSUPPORTED_TYPES:
                 object_notes.append(f"Object '{instance_name(instance)}': {ob.type.lower()} objects are not "
@@ -204,9 +210,9 @@ class BlenderSync:
             reason = "the running render did not stop in time"
         if reason:
             if build is None:
-                build = _Build(self.core)
+                build = _Build(self.core, self._specs)
                 for where in placements:
-                    build.add(where, lambda key=where.mesh_key: self._arrays[key])
+                    build.add(where, lambda needs, key=where.mesh_key: self._arrays[key])
             self._finish(build)
             report.rebuilt, report.reason = True, reason
         elif in_place:
@@ -245,11 +251,15 @@ class BlenderSync:
                 self._materials_dirty = True
         return dirty_objects, dirty_data
 
-    def _mesh_arrays(self, ob, key, report):
-        """The arrays of evaluated object `ob`, read from Blender once per sync (kept when keep_arrays)."""
+    def _mesh_arrays(self, ob, key, report, needs):
+        """The arrays of evaluated object `ob` with what mesh.MeshNeeds `needs` asks for, read from Blender once
+        per sync (kept when keep_arrays), again when another object's materials need more of the same mesh."""
         if key in self._read:
-            return self._arrays[key]
-        arrays = mesh.triangle_mesh(ob)
+            kept = self._arrays[key]
+            if kept is None or kept.provides(needs):
+                return kept
+            needs = needs | mesh.MeshNeeds(tuple(sorted(kept.attributes)), kept.texspace is not None)
+        arrays = mesh.triangle_mesh(ob, needs)
         self.mesh_exports += 1
         report.meshes += 1
         if self._keep_arrays:

@@ -1,4 +1,4 @@
-"""Image Texture nodes -> core textures (base colours looked up at the hit's UV).
+"""Image Texture nodes -> core textures (base colours looked up at the hit's UV, or read by node programs).
 
 Cycles' Image Texture defaults are what the core does: UV coordinates from the render UV map, Linear
 (bilinear) interpolation, Repeat extension, flat projection, the image's straight colour. The image reaches the
@@ -43,20 +43,23 @@ def core_reads_image_files():
     return bool(IMAGE_FILES)
 
 
-def texture_reference(node, notes):
-    """(TextureRef or None, colour to use when there is no texture) for an Image Texture node."""
+def texture_reference(node, notes, program=False):
+    """(TextureRef or None, colour to use when there is no texture) for an Image Texture node (or an Environment
+    Texture node in a program). With `program` the node is compiled to a node program (export/shader_program.py),
+    which renders its coordinates, interpolation, extension and projection: only the image itself is noted."""
     image = node.image
     if image is None:
-        notes.append("Image Texture node without an image: rendered magenta, as Cycles does")
+        notes.append(f"{node.bl_label} node without an image: rendered magenta, as Cycles does")
         return None, MISSING_IMAGE_COLOR
-    if node.inputs["Vector"].is_linked:
-        notes.append(f"image '{image.name}': texture coordinates from other nodes ignored, the UV map used")
-    if node.interpolation != 'Linear':
-        notes.append(f"image '{image.name}': {node.interpolation} interpolation rendered as Linear")
-    if node.extension != 'REPEAT':
-        notes.append(f"image '{image.name}': extension {node.extension} rendered as Repeat")
-    if node.projection != 'FLAT':
-        notes.append(f"image '{image.name}': {node.projection.lower()} projection rendered as flat (UV)")
+    if not program:
+        if node.inputs["Vector"].is_linked:
+            notes.append(f"image '{image.name}': texture coordinates from other nodes ignored, the UV map used")
+        if node.interpolation != 'Linear':
+            notes.append(f"image '{image.name}': {node.interpolation} interpolation rendered as Linear")
+        if node.extension != 'REPEAT':
+            notes.append(f"image '{image.name}': extension {node.extension} rendered as Repeat")
+        if node.projection != 'FLAT':
+            notes.append(f"image '{image.name}': {node.projection.lower()} projection rendered as flat (UV)")
     if image.source in ('SEQUENCE', 'MOVIE', 'TILED'):
         notes.append(f"image '{image.name}': {image.source.lower()} image rendered with its first frame or tile")
 

@@ -9,6 +9,8 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include "photonsplat/shader_program.h"
+
 namespace ps {
 
 struct Ray {
@@ -35,6 +37,9 @@ public:
     // Perspective: tan of half the vertical field of view; orthographic: half the view height in world units.
     float vertical_half_extent() const { return half_extent_y_; }
 
+    // What shader programs see of the camera (Camera Data, camera and window coordinates), in world space.
+    ShaderCamera shader_camera() const;
+
     // Ray through the point (px, py) of the image plane, in pixel units (pixel centres at +0.5).
     Ray generate_ray(float px, float py) const;
     // Distance along `ray` (a ray of generate_ray) to the far clip plane: Cycles clips camera rays at clip_end.
@@ -46,6 +51,7 @@ private:
     glm::mat4 to_world_;  // camera → render space
     glm::dvec3 world_position_;
     glm::dvec3 origin_{0.0};
+    glm::mat4 projection_;
     glm::mat4 inverse_projection_;
     glm::vec3 forward_;
     int width_;

@@ -65,7 +65,8 @@ private:
     std::vector<float> emitter_probability_;
 
     size_t pick_emitter(float u) const;
-    glm::vec3 emission_of(const Emitter& e) const;
+    std::vector<glm::vec3> emitter_emission_;  // radiance of each emitter (a program's: at its centroid)
+    glm::vec3 emission_of(size_t emitter) const;
 };
 
 }  // namespace ps

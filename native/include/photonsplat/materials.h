@@ -1,6 +1,6 @@
 // A material: a weighted sum of closures (closures.h), as Cycles' shader nodes build one, plus its emission and
-// whether it is a holdout. The add-on lowers Blender's nodes to closures (export/materials.py); the core never
-// sees a node. For scripts and tests a material may instead name one of four simple kinds, which
+// whether it is a holdout. The add-on lowers Blender's shader nodes to closures (export/materials.py), and the
+// nodes that drive their inputs to a shader program (shader_program.h) that sets those inputs at each hit. For scripts and tests a material may instead name one of four simple kinds, which
 // lower_simple_material turns into closures when the material is added to a scene.
 #pragma once
 #include <cstdint>
@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include "photonsplat/closures.h"
+#include "photonsplat/shader_program.h"
 
 namespace ps {
 
@@ -41,6 +42,9 @@ struct Material {
     // kind == closures, or filled by lower_simple_material:
     std::vector<Closure> closures;   // at most kMaxClosures
     std::vector<MixFactor> factors;  // at most kMaxFactors
+    // Sets closure inputs, the emission and the shading normal at each hit (its outputs override the constants
+    // above). Scene::add_material folds what is constant into the closures; empty: nothing varies.
+    ShaderProgram program;
 
     // Derived from the closures by finalize_material (Scene::add_material calls it):
     bool has_delta = false;        // a sharp reflection, sharp refraction or transparent closure
@@ -51,6 +55,9 @@ struct Material {
     bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
     bool textured = false;         // a closure reads a texture: hits need their UV
     bool lambert_only = false;     // only Lambert closures without factors: the stages take their albedo directly
+    bool programmed = false;       // a program runs at each hit (program not empty after folding)
+    bool program_emission = false; // ... and sets the emission
+    bool program_normal = false;   // ... and the shading normal (surface_at applies it)
 
     // Only delta closures: every path that reaches the surface goes on (no view sample, no photon stored).
     bool is_specular() const { return has_delta && !has_lobes; }
@@ -66,7 +73,10 @@ void validate(const Material& m, const std::string& where);
 
 // Fills m.closures and m.factors from a simple kind (diffuse, mirror, glass, glossy); then finalize_material.
 void lower_simple_material(Material& m);
-// The derived flags above, from m.closures.
+// The derived flags above, from m.closures and the program's outputs.
 void finalize_material(Material& m);
+// After finalize_program: moves outputs that read constant registers into the closures and the emission, and
+// empties a program left with nothing to do.
+void fold_constant_outputs(Material& m);
 
 }  // namespace ps

@@ -12,6 +12,9 @@ class Scene;
 struct Hit;
 struct Material;
 
+// The kind of ray that found a surface, as Light Path nodes see it.
+enum class ShaderRay : uint8_t { camera, reflected, shadow, photon };
+
 struct SurfacePoint {
     glm::vec3 position;
     glm::vec3 geometric_normal;  // unit, facing the side the ray came from
@@ -22,10 +25,17 @@ struct SurfacePoint {
     glm::vec3 tangent;           // for anisotropic materials only: unit, ⟂ shading normal, radial about the object's
                                  // Z axis (Cycles' default tangent); 0 otherwise
     float rounding_scale;        // Instance::rounding_scale of the surface hit, for offset_ray_origin
+    // For shader programs (material_program.h):
+    uint32_t instance = 0, triangle = 0;
+    glm::vec2 bary{0.0f};        // the hit's barycentrics (u, v of the 2nd and 3rd corners)
+    float distance = 0.0f;       // along the ray that found it
+    glm::vec3 smooth_normal{0.0f};  // the interpolated normal before a program's Bump or Normal Map (= shading_normal
+                                    // for materials without one), on the side of geometric_normal
+    ShaderRay ray_kind = ShaderRay::camera;  // what arrived, for Light Path nodes (callers set it)
 };
 
 // Resolves a hit (instance + triangle + barycentrics) to a world-space surface point: position, normals
-// (through the instance's normal matrix), UV and the material's textured colour. The one place where hits
+// (through the instance's normal matrix, then a program's Bump or Normal Map), UV. The one place where hits
 // become surfaces, for camera paths, shadow-ray origins and photon paths alike.
 SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
 

@@ -48,6 +48,17 @@ struct MeshInput {
     const float* uvs = nullptr;            // optional texture coordinates, see uvs_per_corner
     bool uvs_per_corner = false;           // false: vertex_count × 2; true: triangle_count × 3 corners × 2
     const int32_t* material_ids = nullptr; // optional, triangle_count scene material indices (default 0)
+    // Named per-vertex or per-corner values that node programs read (UV maps by name, colour attributes).
+    struct Attribute {
+        uint32_t id = 0;               // Scene::attribute_id of its name
+        const float* data = nullptr;   // vertex_count × components, or triangle_count × 3 × components
+        int components = 0;            // 1 to 4
+        bool per_corner = false;
+    };
+    std::vector<Attribute> attributes;
+    // Blender's texture space (Generated coordinates = (p − location) / size / 2 + 0.5); absent: the mesh's box.
+    bool has_texspace = false;
+    glm::vec3 texspace_location{0.0f}, texspace_size{1.0f};
     glm::dmat4 transform{1.0};             // object → world; used by add_mesh only
 };
 
@@ -75,9 +86,23 @@ struct MeshData {
     std::vector<glm::vec2> uvs;         // 3 per triangle; empty: no UV map (every UV is 0, 0)
     std::vector<uint32_t> materials;    // 1 per triangle
     glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
+    struct Attribute {
+        uint32_t id = 0;                    // Scene::attribute_id
+        std::vector<glm::vec4> corners;     // 3 per kept triangle; missing components 0, alpha 1
+    };
+    std::vector<Attribute> attributes;      // only those some material's program reads (the add-on's choice)
+    glm::vec3 texspace_location{0.0f}, texspace_size{1.0f};  // object space (not minus centre)
+
+    // The attribute with this id, or nullptr.
+    const Attribute* attribute(uint32_t id) const {
+        for (const Attribute& a : attributes)
+            if (a.id == id) return &a;
+        return nullptr;
+    }
 
     size_t triangle_count() const { return materials.size(); }
     size_t bytes() const;
+    size_t attribute_bytes() const;
 };
 
 // A mesh placed in the world.
@@ -93,6 +118,10 @@ struct Instance {
     // instance carry float rounding of this size, whatever their render-space coordinates (offset_ray_origin).
     float rounding_scale = 0.0f;
     uint32_t visibility = kAllRays;   // RayVisibility bits
+    // What Object Info nodes read.
+    glm::vec4 color{1.0f};            // Blender's object colour
+    float pass_index = 0.0f;          // Object Index
+    float random = 0.0f;              // Cycles' per-object random number in [0, 1)
 };
 
 // One placed triangle in render space (corner positions only), e.g. for sampling emissive surfaces.
@@ -133,6 +162,16 @@ public:
     // the BVH (lights are read afresh by each render). Not to be called while a render of this scene runs.
     void clear_lights();
     void set_background(const glm::vec3& radiance);    // world colour × strength, seen by camera rays
+    // Object Info's colour, pass index and random number of an instance.
+    void set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random);
+    // The id of a mesh attribute name (UV map or colour attribute) that programs and meshes refer to; names are
+    // registered on first use.
+    uint32_t attribute_id(const std::string& name);
+    const std::vector<std::string>& attribute_names() const { return attribute_names_; }
+    // The camera that Camera Data and the camera / window texture coordinates see: each render sets it from its
+    // own camera before shading (two renders of one scene with different cameras must not run at once).
+    void set_shader_camera(const ShaderCamera& camera) const { shader_camera_ = camera; }
+    const ShaderCamera& shader_camera() const { return shader_camera_; }
 
     const std::vector<Material>& materials() const { return materials_; }
     const std::vector<Texture>& textures() const { return textures_; }
@@ -166,6 +205,8 @@ private:
     std::vector<MeshData> meshes_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};
+    std::vector<std::string> attribute_names_;
+    mutable ShaderCamera shader_camera_;
     glm::dvec3 origin_{0.0};
     // World-space box of the instances as placed by add_instance (and as they are after fit_origin), in double.
     glm::dvec3 placed_min_{std::numeric_limits<double>::infinity()};

@@ -32,7 +32,7 @@ namespace ps {
     X(copy_float,        0, "f",      "f")                                                                         \
     X(copy_vector,       0, "v",      "v")                                                                         \
     X(combine_xyz,       0, "fff",    "v")                                                                         \
-    X(color_to_float,    0, "v",      "f")   /* Cycles' colour → float: luminance (0.2126, 0.7152, 0.0722) */     \
+    X(color_to_float,    0, "v",      "f")   /* Cycles' colour → float: luminance, nodes/color_math.h */        \
     X(vector_to_float,   0, "v",      "f")   /* vector → float: the average of the three */                        \
     X(float_to_vector,   0, "f",      "v")   /* broadcast */                                                       \
     /* --- the shading point (shader_globals_ops.cpp) --- */                                                      \
@@ -43,7 +43,8 @@ namespace ps {
     X(attribute,         2, "",       "vvff") /* params: bump, attribute id; color, vector, fac, alpha */          \
     X(geometry,          1, "",       "vvvvvvfff") /* params: bump; position, normal, tangent, true normal,     */ \
                                                    /* incoming, parametric, backfacing, pointiness, random      */ \
-    X(object_info,       0, "",       "vvffff") /* location, color, alpha, object index, material index, random */ \
+    X(object_info,       0, "",       "vvffff") /* location, color, alpha, object index, material index (always */ \
+                                              /* 0: the compiler substitutes the material's constant), random */  \
     X(light_path,        0, "",       "fffffffffffff") /* camera, shadow, diffuse, glossy, singular, reflection, */ \
                                      /* transmission, ray length, ray depth, diffuse, glossy, transparent,       */ \
                                      /* transmission depth */                                                      \
@@ -52,7 +53,8 @@ namespace ps {
     X(layer_weight,      0, "fv",     "ff")  /* blend, normal; fresnel, facing */                                  \
     /* params: texture (Scene::textures index), interpolation (0 linear, 1 closest, 2 cubic, 3 smart), extension */ \
     /* (0 repeat, 1 extend, 2 clip, 3 mirror), projection (0 flat, 1 box, 2 sphere, 3 tube), alpha (0 straight */ \
-    /* colour, 1 colour × alpha: Cycles' output for premultiplied / ignore-alpha images is the stored colour)   */ \
+    /* colour: Cycles' unassociated output, 1 associated colour × alpha, 2 the stored colour: channel packed   */ \
+    /* or alpha ignored) */                                                                                       \
     X(image_texture,     5, "vf",     "vf")  /* vector, box blend; color, alpha */                                 \
     X(environment_texture, 3, "v",    "vf")  /* params: texture, interpolation, projection (0 equirect, 1 mirror */ \
                                              /* ball); vector; color, alpha */                                     \
@@ -168,39 +170,45 @@ struct ShaderProgram {
     bool uses_globals = false;  // set by finalize_program: an instruction reads the shading point
 };
 
-// Everything about the shading point that a node can read. World-space positions are in render space plus
-// Scene::origin() (what Blender calls world space); directions are unit.
+struct MeshData;
+struct Instance;
+
+// Everything about the shading point that a node can read (shader_globals.h fills it from a hit). Positions are
+// in world space (render space + Scene::origin(), what Blender calls world space); directions are unit.
 struct ShaderGlobals {
-    glm::vec3 P{0.0f};        // position, world space
+    glm::vec3 P{0.0f};               // position
     glm::vec3 N{0.0f, 0.0f, 1.0f};   // shading normal, facing the incoming ray (Cycles flips it on back faces)
     glm::vec3 Ng{0.0f, 0.0f, 1.0f};  // geometric normal, the same side
     glm::vec3 I{0.0f, 0.0f, 1.0f};   // towards where the ray came from
-    glm::vec3 dPdx{0.0f}, dPdy{0.0f};  // the position's change across a pixel (ray differentials, approximated)
-    glm::vec2 uv{0.0f};
-    glm::vec2 duvdx{0.0f}, duvdy{0.0f};
-    glm::vec3 dPdu{0.0f};     // the surface's direction of increasing u (Normal Map's tangent), world space
-    float tangent_sign = 1.0f;
-    glm::vec3 tangent{0.0f};  // Geometry's tangent: radial about the object's Z axis, world space
-    glm::vec2 barycentric{0.0f};  // Geometry's parametric output: (u, v) of the triangle
-    bool backfacing = false;
-    glm::mat4 world_to_object{1.0f};
-    glm::mat4 object_to_world{1.0f};
-    glm::vec3 texspace_location{0.0f}, texspace_size{1.0f};  // Generated = (P_object − location) / size / 2 + 0.5
-    // Object Info
-    glm::vec3 object_location{0.0f};
-    glm::vec4 object_color{1.0f};
-    float object_index = 0.0f, material_index = 0.0f, object_random = 0.0f;
-    // the mesh's attributes at the point: scene attribute id → value (rgba); resolved by the caller
-    const struct MeshData* mesh = nullptr;
+    // Cycles 3.4's compact differential: the footprint dP of the ray at P, and the offsets a Bump node's height
+    // is evaluated at, dP times two orthonormal directions about Ng (Cycles' differential_from_compact).
+    float dP = 0.0f;
+    glm::vec3 dPdx{0.0f}, dPdy{0.0f};
+    // The hit on its mesh: the triangle, its barycentrics (u, v of the 2nd and 3rd corners) and their changes
+    // along dPdx and dPdy (for UVs and attributes at a bump offset). mesh == nullptr: no mesh (a test's point).
+    const MeshData* mesh = nullptr;
+    const Instance* instance = nullptr;
     uint32_t triangle = 0;
+    glm::vec2 bary{0.0f}, dbary_dx{0.0f}, dbary_dy{0.0f};
+    glm::vec3 object_position{0.0f};  // P in the object's own coordinates (Blender's object space)
+    glm::mat3 world_to_object_linear{1.0f};  // the object transform's inverse linear part
+    glm::mat3 object_to_world_linear{1.0f};
+    bool backfacing = false;
     // Light Path: what kind of ray arrived
     bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false,
          transmission_ray = false;
     float ray_length = 0.0f, ray_depth = 0.0f;
-    // Camera
-    glm::mat4 world_to_camera{1.0f};  // Cycles' camera space: +Z forward
-    glm::mat4 world_to_ndc{1.0f};     // Window coordinates: x, y in [0, 1] across the frame
+};
+
+// The camera as Camera Data and the camera / window texture coordinates see it (Scene::shader_camera).
+struct ShaderCamera {
+    glm::mat4 world_to_camera{1.0f};  // Cycles' camera space: +Z forward, +Y up
+    glm::mat4 world_to_ndc{1.0f};     // clip space of the camera, then x, y mapped to [0, 1] across the frame
+    glm::vec3 position{0.0f};         // world space
     bool orthographic = false;
+    // A pixel's footprint: per unit of distance (perspective) or its size (orthographic); 0 when no camera
+    // was set. Sets ShaderGlobals::dP at camera hits, as Cycles' ray differentials do.
+    float pixel_spread = 0.0f;
 };
 
 class Scene;

@@ -50,9 +50,9 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
 // transmission), or the transmission lobes (translucent, rough refraction).
 enum class LobeSet : uint8_t { all, reflection, transmission };
 
-// The albedo of a lambert_only material at the hit (Σ of its closures' weights, textured): what shade() would put
-// in Bsdf::lambert, without the rest of it.
-glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface);
+// The albedo of a lambert_only material at the hit seen from wo (Σ of its closures' weights, textured or set by
+// its program): what shade() would put in Bsdf::lambert, without the rest of it.
+glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo);
 
 // Σ f of the set's non-delta parts for wi (no cosine). Reflection parts count only for wi on wo's side of the
 // geometric normal, transmission parts only on the other (light leaking under the shading normal must not count).

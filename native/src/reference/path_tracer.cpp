@@ -24,6 +24,7 @@
 #include "photonsplat/direct_light.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
+#include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/rng.h"
@@ -131,13 +132,14 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             radiance += throughput * scene.background();  // the world: BSDF sampling only, weight 1
             break;
         }
-        const SurfacePoint s = surface_at(scene, ray, hit);
+        SurfacePoint s = surface_at(scene, ray, hit);
+        if (depth > 0) s.ray_kind = ShaderRay::reflected;
         const Material& m = *s.material;
-        if (m.emission != glm::vec3(0.0f)) {
+        if (m.emission != glm::vec3(0.0f) || m.program_emission) {
             // Emissive triangles are one source of the path tracer (never photon-mapped).
             const float light_pdf =
                 last.nonspecular && !last.specular_since ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) : 0.0f;
-            radiance += throughput * m.emission * light_weight(last, false, light_pdf);
+            radiance += throughput * emission_at(scene, s, -ray.direction) * light_weight(last, false, light_pdf);
         }
         const Bsdf b = shade(scene, s, -ray.direction);
         if (bsdf_has(b, LobeSet::all)) {

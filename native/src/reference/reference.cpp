@@ -64,6 +64,7 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
                                  RenderControl& control) {
     validate(settings);
     const Camera camera = world_camera.relative_to(scene.origin());  // paths are traced in render space
+    scene.set_shader_camera(world_camera.shader_camera());
     const int width = camera.width(), height = camera.height();
     const size_t pixels = static_cast<size_t>(width) * height;
     {

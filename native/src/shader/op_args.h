@@ -30,8 +30,13 @@ struct OpArgs {
     }
 };
 
+class Scene;
+
 // Each group of ops is implemented in its own file; each returns false for an op that is not its own. An invalid
 // mode (a param out of range) gives zeros, never undefined behaviour.
+bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, const Scene& scene,
+                          const ShaderGlobals& g);                          // shader/shading_point_ops.cpp
+bool run_image_op(ShaderOp op, const OpArgs& a, const Scene& scene, const ShaderGlobals& g);  // shader/image_ops.cpp
 bool run_texture_op(ShaderOp op, const OpArgs& a, const float* tables);    // nodes/texture_nodes.cpp
 bool run_converter_op(ShaderOp op, const OpArgs& a, const float* tables);  // nodes/converter_nodes.cpp
 

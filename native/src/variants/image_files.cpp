@@ -84,12 +84,6 @@ Texture load_texture(const std::string& name, const std::string& path, ColorSpac
     const size_t row = static_cast<size_t>(width) * channels;
     for (int y = 0; y < height / 2; ++y)
         std::swap_ranges(pixels.begin() + y * row, pixels.begin() + (y + 1) * row, pixels.begin() + (height - 1 - y) * row);
-    // Two channels (grey + alpha): use the grey one.
-    if (channels == 2) {
-        std::vector<float> grey(static_cast<size_t>(width) * height);
-        for (size_t i = 0; i < grey.size(); ++i) grey[i] = pixels[2 * i];
-        return Texture(name, grey.data(), width, height, 1, space);
-    }
     return Texture(name, pixels.data(), width, height, channels, space);
 }
 

@@ -1,0 +1,345 @@
+// Shader programs: the encoding's validation, constant folding, and the ops that read the shading point
+// (coordinates, attributes, images, Bump, Normal Map), checked against values worked out by hand from Cycles
+// 3.4's definitions. The procedural texture and converter ops have their own tests against Cycles' renders
+// (test_texture_nodes.cpp, test_converter_nodes.cpp).
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "photonsplat/errors.h"
+#include "photonsplat/material_program.h"
+#include "photonsplat/render.h"
+#include "photonsplat/ray_tracer.h"
+#include "photonsplat/scattering.h"
+#include "photonsplat/scene.h"
+#include "photonsplat/shading.h"
+#include "test_scenes.h"
+
+using namespace ps;
+
+namespace {
+
+// Writes programs the way the add-on's compiler does: registers for constants, one instruction per node.
+struct ProgramWriter {
+    ShaderProgram p;
+    int constant(float v) {
+        p.registers.push_back(v);
+        return static_cast<int>(p.registers.size()) - 1;
+    }
+    int vec(const glm::vec3& v) {
+        const int r = constant(v.x);
+        constant(v.y);
+        constant(v.z);
+        return r;
+    }
+    int scratch(int n) {
+        const int r = static_cast<int>(p.registers.size());
+        p.registers.resize(p.registers.size() + n, 0.0f);
+        return r;
+    }
+    // Outputs: -1 discards; otherwise allocated here, by the op's types.
+    std::vector<int> op(ShaderOp op, std::vector<int> params, std::vector<int> in, std::vector<bool> used = {}) {
+        const ShaderOpInfo& info = shader_op_info(op);
+        const int n_out = static_cast<int>(std::strlen(info.outputs));
+        std::vector<int> out;
+        for (int o = 0; o < n_out; ++o) {
+            const bool keep = used.empty() || used[o];
+            out.push_back(keep ? scratch(info.outputs[o] == 'v' ? 3 : 1) : -1);
+        }
+        p.code.push_back(static_cast<int32_t>(op));
+        p.code.push_back(static_cast<int32_t>(params.size()));
+        p.code.push_back(static_cast<int32_t>(in.size()));
+        p.code.push_back(n_out);
+        p.code.insert(p.code.end(), params.begin(), params.end());
+        p.code.insert(p.code.end(), in.begin(), in.end());
+        p.code.insert(p.code.end(), out.begin(), out.end());
+        return out;
+    }
+    void output(ProgramTarget target, int index, int reg) { p.outputs.push_back({target, index, reg}); }
+};
+
+Material diffuse_closures(const std::string& name) {
+    Material m;
+    m.name = name;
+    m.kind = MaterialKind::closures;
+    Closure c;
+    c.kind = ClosureKind::diffuse;
+    c.color = glm::vec3(0.8f);
+    m.closures.push_back(c);
+    return m;
+}
+
+// The unit quad in z = 0 with UVs (0,0)..(1,1) over (-0.5,-0.5)..(0.5,0.5), and a per-vertex colour attribute.
+uint32_t add_quad(Scene& scene, uint32_t material, uint32_t colour_id) {
+    static const float v[12] = {-0.5f, -0.5f, 0, 0.5f, -0.5f, 0, 0.5f, 0.5f, 0, -0.5f, 0.5f, 0};
+    static const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    static const float colour[16] = {1, 0, 0, 1, 0, 1, 0, 1, 0, 0, 1, 1, 1, 1, 1, 0.5f};
+    static const int32_t t[6] = {0, 1, 2, 0, 2, 3};
+    const int32_t m[2] = {static_cast<int32_t>(material), static_cast<int32_t>(material)};
+    MeshInput mesh = test::mesh_input("quad", v, 4, t, 2, m);
+    mesh.uvs = uv;
+    mesh.attributes.push_back({colour_id, colour, 4, false});
+    return scene.add_mesh_data(mesh);
+}
+
+Ray down_at(float x, float y) { return Ray{{x, y, 5.0f}, {0.0f, 0.0f, -1.0f}}; }
+
+SurfacePoint hit_at(const Scene& scene, float x, float y) {
+    Hit hit;
+    const Ray ray = down_at(x, y);
+    EXPECT_TRUE(scene.ray_tracer().intersect(ray, 0.0f, 100.0f, hit));
+    return surface_at(scene, ray, hit);
+}
+
+glm::vec3 albedo_at(const Scene& scene, float x, float y) {
+    return shade(scene, hit_at(scene, x, y), glm::vec3(0.0f, 0.0f, 1.0f)).lambert;
+}
+
+void expect_vec_near(const glm::vec3& a, const glm::vec3& b, float tolerance) {
+    EXPECT_NEAR(a.x, b.x, tolerance);
+    EXPECT_NEAR(a.y, b.y, tolerance);
+    EXPECT_NEAR(a.z, b.z, tolerance);
+}
+
+}  // namespace
+
+TEST(ShaderProgram, OpTableIsConsistent) {
+    ASSERT_GT(shader_op_count(), 50);
+    for (int i = 0; i < shader_op_count(); ++i) {
+        const ShaderOpInfo& info = shader_op_info(static_cast<ShaderOp>(i));
+        EXPECT_GT(std::strlen(info.name), 0u);
+        EXPECT_GE(info.params, 0);
+        for (const char* t : {info.inputs, info.outputs})
+            for (const char* c = t; *c; ++c) EXPECT_TRUE(*c == 'f' || *c == 'v') << info.name;
+        EXPECT_GT(std::strlen(info.outputs), 0u) << info.name;
+    }
+    EXPECT_STREQ(shader_op_info(ShaderOp::image_texture).name, "image_texture");
+}
+
+TEST(ShaderProgram, ValidationNamesWhatIsWrong) {
+    const auto rejects = [](ShaderProgram p, int closures) {
+        EXPECT_THROW(validate(p, closures, "material 'm'.program"), InvalidInput);
+    };
+    ProgramWriter w;
+    const int a = w.constant(1.0f);
+    const auto out = w.op(ShaderOp::copy_float, {}, {a});
+    w.output(ProgramTarget::closure_roughness, 0, out[0]);
+    EXPECT_NO_THROW(validate(w.p, 1, "p"));
+    rejects(w.p, 0);  // output for a closure the material does not have
+    ShaderProgram bad = w.p;
+    bad.code[0] = 9999;
+    rejects(bad, 1);  // unknown op
+    bad = w.p;
+    bad.code[2] = 2;
+    rejects(bad, 1);  // wrong input count
+    bad = w.p;
+    bad.code[4] = 100;
+    rejects(bad, 1);  // input register out of range
+    bad = w.p;
+    bad.code.pop_back();
+    rejects(bad, 1);  // truncated
+    bad = w.p;
+    bad.registers[0] = std::nanf("");
+    rejects(bad, 1);
+    bad = w.p;
+    bad.outputs[0].register_ = 1000;
+    rejects(bad, 1);
+    bad = w.p;
+    bad.outputs[0] = {ProgramTarget::emission, 0, out[0]};  // a vector output past the last register
+    rejects(bad, 1);
+    ProgramWriter ramp;
+    ramp.op(ShaderOp::color_ramp, {0, 4, 1}, {ramp.constant(0.5f)});
+    ramp.p.tables.assign(15, 0.0f);  // 4 entries need 16 floats
+    rejects(ramp.p, 1);
+
+    // The scene refuses a program that names a texture it does not have.
+    Scene scene;
+    ProgramWriter img;
+    const auto c = img.op(ShaderOp::image_texture, {3, 0, 0, 0, 0}, {img.vec(glm::vec3(0.5f)), img.constant(0.0f)});
+    img.output(ProgramTarget::closure_color, 0, c[0]);
+    Material m = diffuse_closures("image");
+    m.program = img.p;
+    EXPECT_THROW(scene.add_material(m), InvalidInput);
+}
+
+TEST(ShaderProgram, ConstantInputsFoldIntoTheClosures) {
+    Scene scene;
+    ProgramWriter w;
+    const auto rgb = w.op(ShaderOp::combine_xyz, {}, {w.constant(0.2f), w.constant(0.4f), w.constant(0.6f)});
+    const auto grey = w.op(ShaderOp::color_to_float, {}, {rgb[0]});
+    w.op(ShaderOp::texture_coordinate, {0, -1}, {});  // read by nothing: dropped
+    w.output(ProgramTarget::closure_color, 0, rgb[0]);
+    w.output(ProgramTarget::closure_roughness, 0, grey[0]);
+    Material m = diffuse_closures("folded");
+    m.program = w.p;
+    const Material& added = scene.materials()[scene.add_material(m)];
+    EXPECT_FALSE(added.programmed);
+    EXPECT_TRUE(added.program.empty());
+    expect_vec_near(added.closures[0].color, glm::vec3(0.2f, 0.4f, 0.6f), 1e-6f);
+    // Cycles 3.4's luminance for Blender's default colour configuration.
+    EXPECT_NEAR(added.closures[0].roughness, 0.212673f * 0.2f + 0.715153f * 0.4f + 0.0721755f * 0.6f, 1e-5f);
+    EXPECT_TRUE(added.directional);  // an Oren–Nayar roughness came out of the program
+}
+
+TEST(ShaderProgram, CoordinatesAndAttributesAtTheHit) {
+    Scene scene;
+    const uint32_t colour_id = scene.attribute_id("Col");
+    EXPECT_EQ(scene.attribute_id("Col"), colour_id);
+    ProgramWriter uv_w;
+    const auto tc = uv_w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, true, false, false, false, false});
+    uv_w.output(ProgramTarget::closure_color, 0, tc[2]);
+    Material uv_m = diffuse_closures("uv");
+    uv_m.program = uv_w.p;
+    const uint32_t uv_material = scene.add_material(uv_m);
+    ASSERT_TRUE(scene.materials()[uv_material].programmed);
+    ASSERT_TRUE(scene.materials()[uv_material].lambert_only);
+
+    ProgramWriter gen_w;
+    const auto gen = gen_w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {true, false, false, false, false, false, false});
+    gen_w.output(ProgramTarget::emission, 0, gen[0]);
+    Material gen_m = diffuse_closures("generated");
+    gen_m.program = gen_w.p;
+    const uint32_t gen_material = scene.add_material(gen_m);
+
+    ProgramWriter attr_w;
+    const auto attr = attr_w.op(ShaderOp::attribute, {0, static_cast<int>(colour_id)}, {});
+    attr_w.output(ProgramTarget::closure_color, 0, attr[0]);
+    attr_w.output(ProgramTarget::emission, 0, attr_w.op(ShaderOp::float_to_vector, {}, {attr[3]})[0]);
+    Material attr_m = diffuse_closures("attribute");
+    attr_m.program = attr_w.p;
+    const uint32_t attr_material = scene.add_material(attr_m);
+
+    scene.add_instance(add_quad(scene, uv_material, colour_id), glm::mat4(1.0f));
+    scene.add_instance(add_quad(scene, gen_material, colour_id), glm::translate(glm::mat4(1.0f), glm::vec3(3, 0, 0)));
+    scene.add_instance(add_quad(scene, attr_material, colour_id), glm::translate(glm::mat4(1.0f), glm::vec3(6, 0, 0)));
+
+    expect_vec_near(albedo_at(scene, 0.2f, -0.3f), glm::vec3(0.7f, 0.2f, 0.0f), 1e-5f);
+    // The lambert_only path of the stages reads the same values.
+    const SurfacePoint s = hit_at(scene, 0.2f, -0.3f);
+    expect_vec_near(lambert_albedo(scene, s, glm::vec3(0, 0, 1)), glm::vec3(0.7f, 0.2f, 0.0f), 1e-5f);
+    // Generated: the box's texture space, z of a flat mesh at 0.5 (its zero extent counts as 1).
+    const SurfacePoint g = hit_at(scene, 3.25f, 0.25f);
+    expect_vec_near(emission_at(scene, g, glm::vec3(0, 0, 1)), glm::vec3(0.75f, 0.75f, 0.5f), 1e-5f);
+    // Vertex colours: the corner (-0.5, 0.5) is white with alpha 0.5, (0.5, 0.5) blue, (0.5, -0.5) green.
+    const SurfacePoint corner = hit_at(scene, 5.5001f, 0.4999f);
+    expect_vec_near(albedo_at(scene, 5.5001f, 0.4999f), glm::vec3(1.0f), 1e-3f);
+    expect_vec_near(emission_at(scene, corner, glm::vec3(0, 0, 1)), glm::vec3(0.5f), 1e-3f);
+    expect_vec_near(albedo_at(scene, 6.4999f, 0.4999f), glm::vec3(0.0f, 0.0f, 1.0f), 1e-3f);
+    expect_vec_near(albedo_at(scene, 6.4999f, -0.4999f), glm::vec3(0.0f, 1.0f, 0.0f), 1e-3f);
+}
+
+TEST(ShaderProgram, ImageLookupsFollowCycles) {
+    // 4 × 1: grey levels 0, 0.25, 0.5, 1 with alpha 1, 1, 0.5, 0 in the last two.
+    const float pixels[16] = {0, 0, 0, 1, 0.25f, 0.25f, 0.25f, 1, 0.5f, 0.5f, 0.5f, 0.5f, 1, 1, 1, 0};
+    const Texture t("ramp", pixels, 4, 1, 4, ColorSpace::linear);
+    const auto grey = [&](float u, TextureInterpolation i, TextureExtension e, TextureAlpha a = TextureAlpha::channel_packed) {
+        return t.sample(u, 0.5f, i, e, a);
+    };
+    EXPECT_FLOAT_EQ(grey(0.3f, TextureInterpolation::closest, TextureExtension::repeat).x, 0.25f);
+    EXPECT_FLOAT_EQ(grey(0.25f, TextureInterpolation::linear, TextureExtension::repeat).x, 0.125f);  // between centres
+    EXPECT_FLOAT_EQ(grey(0.0f, TextureInterpolation::linear, TextureExtension::repeat).x, 0.5f);     // wraps: 0 and 1
+    EXPECT_FLOAT_EQ(grey(0.0f, TextureInterpolation::linear, TextureExtension::extend).x, 0.0f);
+    EXPECT_FLOAT_EQ(grey(1.2f, TextureInterpolation::closest, TextureExtension::clip).x, 0.0f);
+    EXPECT_FLOAT_EQ(grey(1.2f, TextureInterpolation::closest, TextureExtension::clip).w, 0.0f);
+    EXPECT_FLOAT_EQ(grey(0.0f, TextureInterpolation::linear, TextureExtension::clip).x, 0.0f);       // half outside
+    EXPECT_FLOAT_EQ(grey(-0.3f, TextureInterpolation::closest, TextureExtension::mirror).x, 0.25f);
+    // Cubic: the B-spline at a texel centre is (1 4 1)/6 of its neighbours.
+    EXPECT_NEAR(grey(0.375f, TextureInterpolation::cubic, TextureExtension::extend).x,
+                (0.0f + 4.0f * 0.25f + 0.5f) / 6.0f, 1e-6f);
+    // Alpha: interpolated associated, then divided back (Cycles' unassociated output), or left associated.
+    const glm::vec4 mid = grey(0.5f, TextureInterpolation::linear, TextureExtension::repeat, TextureAlpha::unassociated);
+    EXPECT_NEAR(mid.w, 0.75f, 1e-6f);
+    EXPECT_NEAR(mid.x, (0.5f * 0.25f + 0.5f * 0.25f) / 0.75f, 1e-6f);
+    const glm::vec4 assoc = grey(0.5f, TextureInterpolation::linear, TextureExtension::repeat, TextureAlpha::associated);
+    EXPECT_NEAR(assoc.x, 0.5f * 0.25f + 0.5f * 0.25f, 1e-6f);
+    EXPECT_FLOAT_EQ(grey(0.875f, TextureInterpolation::closest, TextureExtension::repeat, TextureAlpha::unassociated).x, 0.0f);
+    // Non-finite coordinates give transparent black, never a crash.
+    EXPECT_EQ(t.sample(std::nanf(""), 0.5f, TextureInterpolation::cubic, TextureExtension::repeat, TextureAlpha::unassociated),
+              glm::vec4(0.0f));
+    EXPECT_TRUE(std::isfinite(grey(1e30f, TextureInterpolation::cubic, TextureExtension::mirror).x));
+}
+
+TEST(ShaderProgram, BumpTiltsTheNormalAgainstTheHeightsGradient) {
+    // Height = (x + y + z) / 3 in object space, distance 0.3: N' = normalize(N − 0.3 ∇h) = normalize(−0.1, −0.1, 1).
+    Scene scene;
+    ProgramWriter w;
+    std::vector<int> heights;
+    for (int k = 0; k < 3; ++k) {
+        const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1}, {}, {false, false, false, true, false, false, false});
+        heights.push_back(w.op(ShaderOp::vector_to_float, {}, {tc[3]})[0]);
+    }
+    const auto n = w.op(ShaderOp::bump, {0, 0},
+                        {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2], w.vec(glm::vec3(0.0f))});
+    w.output(ProgramTarget::normal, 0, n[0]);
+    Material m = diffuse_closures("bumped");
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    ASSERT_TRUE(scene.materials()[material].program_normal);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
+    const SurfacePoint s = hit_at(scene, 0.1f, 0.2f);
+    expect_vec_near(s.shading_normal, glm::normalize(glm::vec3(-0.1f, -0.1f, 1.0f)), 1e-4f);
+    expect_vec_near(s.smooth_normal, glm::vec3(0, 0, 1), 1e-6f);
+    expect_vec_near(shade(scene, s, glm::vec3(0, 0, 1)).n, s.shading_normal, 1e-6f);
+}
+
+TEST(ShaderProgram, TangentSpaceNormalMapFollowsTheUvs) {
+    Scene scene;
+    ProgramWriter w;
+    const auto n = w.op(ShaderOp::normal_map, {0, -1}, {w.constant(1.0f), w.vec(glm::vec3(0.75f, 0.5f, 1.0f))});
+    w.output(ProgramTarget::normal, 0, n[0]);
+    Material m = diffuse_closures("normal mapped");
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
+    // (0.75, 0.5, 1) → (0.5, 0, 1) in (tangent = +u = +x, bitangent = +v = +y, normal).
+    expect_vec_near(hit_at(scene, 0.1f, 0.1f).shading_normal, glm::normalize(glm::vec3(0.5f, 0.0f, 1.0f)), 1e-5f);
+}
+
+TEST(ShaderProgram, ProgrammedEmissionIsSeenAndSampledPerTriangle) {
+    Scene scene;
+    ProgramWriter w;
+    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, true, false, false, false, false});
+    w.output(ProgramTarget::emission, 0, tc[2]);
+    Material m = diffuse_closures("lamp");
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    EXPECT_TRUE(scene.materials()[material].program_emission);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
+    expect_vec_near(emission_at(scene, hit_at(scene, 0.3f, -0.4f), glm::vec3(0, 0, 1)), glm::vec3(0.8f, 0.1f, 0.0f),
+                    1e-5f);
+}
+
+TEST(ShaderProgram, RenderedEmissionShowsWindowCoordinatesAndCameraDepth) {
+    // A plane filling an orthographic view, emitting (window x, window y, view z depth): the frame must show
+    // each pixel's centre in [0, 1]² (window coordinates, y up) and the distance to the camera (4).
+    Scene scene;
+    ProgramWriter w;
+    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, false, false, false, true, false});
+    const auto cam = w.op(ShaderOp::camera_data, {}, {}, {false, true, false});
+    const auto sep = w.op(ShaderOp::combine_xyz, {}, {tc[5], tc[5] + 1, cam[1]});
+    w.output(ProgramTarget::emission, 0, sep[0]);
+    Material m = diffuse_closures("window");
+    m.closures[0].color = glm::vec3(0.0f);
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::scale(glm::mat4(1.0f), glm::vec3(4.0f)));
+    glm::mat4 projection = glm::ortho(-1.0f, 1.0f, -0.5f, 0.5f, 0.1f, 10.0f);
+    const Camera camera(glm::dmat4(test::look_at_matrix({0, 0, 4}, {0, 0, 0}, {0, 1, 0})), projection, 8, 4);
+    RenderSettings settings;
+    settings.photons = 1000;
+    RenderControl control;
+    const RenderResult r = render(scene, camera, settings, control);
+    const std::vector<float>& rgba = r.rgba();
+    for (int y = 0; y < 4; ++y)
+        for (int px = 0; px < 8; ++px) {
+            const float* p = &rgba[4 * (static_cast<size_t>(y) * 8 + px)];
+            EXPECT_NEAR(p[0], (px + 0.5f) / 8.0f, 1e-4f);
+            EXPECT_NEAR(p[1], 1.0f - (y + 0.5f) / 4.0f, 1e-4f);
+            EXPECT_NEAR(p[2], 4.0f, 1e-4f);
+        }
+}
