@@ -14,7 +14,7 @@ The scene (built in memory by `build()`; nothing is committed):
   - an orthographic camera looking down -Z over a 3 m square centred on (0.3, -0.2); a black world;
   - Standard view transform, look None, exposure 0, gamma 1.
 Images (for Image / Environment Texture and Normal Map) are made in memory: "grid_float" (12 x 8 float, linear,
-alpha varying), "grid_byte" (12 x 8 byte, sRGB), "normals" (32 x 32 byte, Non-Color, a tangent-space bump pattern).
+opaque, some values above 1), "grid_float_alpha" (the same with alpha varying from 0.3 to 1), "grid_byte" (12 x 8 byte, sRGB), "normals" (32 x 32 byte, Non-Color, a tangent-space bump pattern).
 
 Each case is a material named after the case, with custom properties "ps_object" (Plane or Dome), "ps_class"
 ("deterministic" or "noise": acceptance (a) asks 1e-3 of the mean for the first, 1 % for the noise-based
@@ -290,9 +290,11 @@ for image in ("grid_float", "grid_byte"):
         simple(f"image_{image}_{extension.lower()}", lambda t, image=image, extension=extension:
                image_node(t, image, 'Linear', extension, vector=uv_tiled(t)).outputs["Color"], node="image")
 simple("image_grid_float_uv_default", lambda t: image_node(t, "grid_float").outputs["Color"], node="image")
-simple("image_grid_float_alpha", lambda t: image_node(t, "grid_float", vector=uv_tiled(t)).outputs["Alpha"],
+simple("image_grid_float_alpha", lambda t: image_node(t, "grid_float_alpha", vector=uv_tiled(t)).outputs["Alpha"],
        node="image")
-simple("image_grid_float_clip_alpha", lambda t: image_node(t, "grid_float", extension='CLIP',
+simple("image_grid_float_alpha_color", lambda t: image_node(t, "grid_float_alpha", vector=uv_tiled(t)).outputs[
+    "Color"], node="image")
+simple("image_grid_float_clip_alpha", lambda t: image_node(t, "grid_float_alpha", extension='CLIP',
                                                            vector=uv_tiled(t)).outputs["Alpha"], node="image")
 for projection, blend in (('BOX', 0.0), ('BOX', 0.3), ('SPHERE', 0.0), ('TUBE', 0.0)):
     simple(f"image_projection_{projection.lower()}" + (f"_blend{blend:g}" if blend else ""),
@@ -669,6 +671,9 @@ def normal_node(t):
 
 
 simple("normal_node_dot", normal_node, obj="Dome", node="normal")
+simple("bump_wave_height", lambda t: t.vscale(t.new("ShaderNodeBump", Strength=1.0, Distance=0.2, Height=t.new(
+    "ShaderNodeTexWave", Scale=1.5, Vector=t.coord("Object")).outputs["Fac"]).outputs[0], 0.5, 0.5), obj="Dome",
+       node="bump")
 simple("fresnel_of_bumped_normal", lambda t: t.new("ShaderNodeFresnel", IOR=1.5, Normal=t.new(
     "ShaderNodeBump", Strength=1.0, Distance=0.2, Height=t.new("ShaderNodeTexWave", Scale=1.5,
                                                                 Vector=t.coord("Object")).outputs["Fac"]).outputs[0]
@@ -713,7 +718,8 @@ simple("group_checker_invert", group_case, node="group")
 # ---- the scene -------------------------------------------------------------------------------------------------
 
 def make_images():
-    """Three small in-memory images: float (alpha varying), byte sRGB, and a Non-Color normal map."""
+    """Four small in-memory images: float (opaque, and with alpha varying), byte sRGB, and a Non-Color normal
+    map."""
     import numpy as np
     if "grid_float" not in bpy.data.images:
         w, h = 12, 8
@@ -721,9 +727,15 @@ def make_images():
         rgba = np.stack([(x + 0.5) / w, (y + 0.5) / h, 0.5 + 0.5 * np.sin(x * 1.3 + y * 2.1),
                          0.3 + 0.7 * ((x + y) % 3) / 2.0], axis=-1)
         rgba[(x.astype(int) + y.astype(int)) % 4 == 0, :3] *= 2.5       # some values above 1 in the float image
-        img = bpy.data.images.new("grid_float", w, h, alpha=True, float_buffer=True)
+        img = bpy.data.images.new("grid_float_alpha", w, h, alpha=True, float_buffer=True)
         img.colorspace_settings.name = "Linear"
         img.pixels.foreach_set(rgba.reshape(-1))
+        img.update()
+        opaque = rgba.copy()
+        opaque[..., 3] = 1.0
+        img = bpy.data.images.new("grid_float", w, h, alpha=True, float_buffer=True)
+        img.colorspace_settings.name = "Linear"
+        img.pixels.foreach_set(opaque.reshape(-1))
         img.update()
         byte = bpy.data.images.new("grid_byte", w, h, alpha=True, float_buffer=False)
         byte.colorspace_settings.name = "sRGB"
@@ -853,12 +865,13 @@ def build(size=64, names=None):
 
 
 def use_case(name):
-    """Put material `name` on its object (Plane or Dome) and hide the other from the render."""
+    """Put material `name` on its object (Plane or Dome) and hide the other from the render and the viewport."""
     mat = bpy.data.materials[name]
     for obj_name in ("Plane", "Dome"):
         obj = bpy.data.objects[obj_name]
         shown = obj_name == mat["ps_object"]
         obj.hide_render = not shown
+        obj.hide_viewport = not shown      # the tools export the viewport depsgraph, which hide_render leaves alone
         obj.data.materials.clear()
         if shown:
             obj.data.materials.append(mat)

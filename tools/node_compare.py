@@ -42,8 +42,33 @@ THRESHOLD = {"deterministic": 1e-3, "noise": 1e-2}
 EDGE = 0.1                 # a pixel differing by more than this fraction of the mean is an "edge" pixel
 MEAN_FLOOR = 1e-3
 
-# What was found by looking at a failing case (filled in after a run; name -> text).
-DIAGNOSED = {}
+# What was found by looking at a failing case (name -> text), 25 Nov 2026 at the merge of "programs: end to end".
+_SRGB_ORDER = (
+    "Cycles interpolates an 8-bit sRGB image's encoded values and decodes the result (NODE_IMAGE_COMPRESS_AS_SRGB); "
+    "Photon Splat decodes the texels first and then interpolates. Checked against both orders computed from the "
+    "image: Cycles matches interpolate-then-decode to 3.6e-5 (mean |diff|), ours decode-then-interpolate to 2.8e-7. "
+    "Closest interpolation, where the order does not matter, passes (`image_grid_byte_closest`).")
+DIAGNOSED = {
+    "image_grid_byte_linear": _SRGB_ORDER, "image_grid_byte_cubic": _SRGB_ORDER,
+    "image_grid_byte_smart": _SRGB_ORDER, "image_grid_byte_extend": _SRGB_ORDER,
+    "image_grid_byte_clip": _SRGB_ORDER,
+    "image_grid_float_alpha_color": (
+        "A float image with alpha below 1 (Blender's default alpha mode, Straight): Cycles' Color output is the "
+        "stored colour (equal to the same image made opaque), ours is the colour multiplied by alpha (the "
+        "image_texture op's alpha param 1), so 0.654 of it on average (the image's mean alpha is 0.65). The Alpha "
+        "output agrees (`image_grid_float_alpha`)."),
+    "math_subtract_signed": (
+        "Kept signed on purpose: Cycles renders negative emission as it is, the core clamps a program's emission at "
+        "0 (materials.cpp); the node's values agree where they are positive."),
+    "geometry_pointiness": "Pointiness is not computed: ours is the constant 0.5.",
+    "geometry_randomperisland": "Random Per Island is not computed: ours is 0 (Cycles 0.97 for the one island).",
+    "bump_wave_height": (
+        "Bump of a height with an 11-pixel period (a scale-1.5 wave) on the dome: ours tilts the normal 2 degrees "
+        "more on average (39.4 against 37.4 degrees from +Z) while smooth heights agree to 5e-6 (`bump_checker_height`, "
+        "`bump_invert_noise`): a different finite-difference step (the ray differential on the inclined surface) "
+        "is the likely cause."),
+    "fresnel_of_bumped_normal": "Fresnel of the normal of `bump_wave_height`: the Bump's difference (Fresnel alone passes).",
+}
 
 
 def parse_args(argv):
