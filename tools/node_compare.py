@@ -517,8 +517,19 @@ def write_markdown(results, path):
     lines += ["## Summary", "",
               f"- **{passed} / {len(rows)}** cases pass: "
               + ", ".join(f"{cls} {p} / {n}" for cls, (p, n) in sorted(by_class.items())) + ".",
-              "- Per node: " + ", ".join(f"{node} {p}/{n}" for node, (p, n) in sorted(by_node.items())) + ".",
-              "", "## Per case", "",
+              "- Per node: " + ", ".join(f"{node} {p}/{n}" for node, (p, n) in sorted(by_node.items())) + "."]
+    for cls in sorted(by_class):
+        ok = [r for r in rows if r["class"] == cls and r.get("pass")]
+        if ok:
+            worst = max(ok, key=lambda r: r["rel"])
+            median = sorted(r["rel"] for r in ok)[len(ok) // 2]
+            lines.append(f"- Passing {cls} cases: median rel {median:.1e}, largest {worst['rel']:.1e} "
+                         f"(`{worst['name']}`; threshold {THRESHOLD[cls]:g}).")
+    edged = [r for r in rows if r.get("pass") and r.get("edge_pixels")]
+    if edged:
+        lines.append(f"- {len(edged)} passing cases have an edge pixel or a few (a Cycles sample across a step): "
+                     + ", ".join(f"`{r['name']}` {r['edge_pixels']}" for r in edged) + ".")
+    lines += ["", "## Per case", "",
               "| # | case | node | class | Cycles mean | rel | inner | max | edge | result |",
               "|---|---|---|---|---|---|---|---|---|---|"]
     for i, r in enumerate(rows, 1):

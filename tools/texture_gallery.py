@@ -62,7 +62,7 @@ def parse_args(argv):
                         help="Cycles' relative noise on the probe mean to reach (default 0.5 %%)")
     parser.add_argument("--cycles-max-samples", type=int, help="Cycles' sample cap (default 2048, quick 256)")
     parser.add_argument("--photons", type=int, help="Photon Splat photons per iteration (default 1000000, quick 50000)")
-    parser.add_argument("--iterations", type=int, help="Photon Splat iterations (default 32, quick 4)")
+    parser.add_argument("--iterations", type=int, help="Photon Splat iterations (default 64, quick 4)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--report-only", action="store_true",
                         help="rewrite the markdown and the contact sheet from build/texture_gallery/ (no rendering)")
@@ -74,7 +74,7 @@ def parse_args(argv):
     args.cycles_samples = args.cycles_samples or (64 if quick else 512)
     args.cycles_max_samples = args.cycles_max_samples or (256 if quick else 2048)
     args.photons = args.photons or (50000 if quick else 1000000)
-    args.iterations = args.iterations or (4 if quick else 32)
+    args.iterations = args.iterations or (4 if quick else 64)
     return args
 
 
