@@ -407,8 +407,14 @@ def write_markdown(results, path):
         lines += ["## Summary", "",
                   f"- Photon Splat: **{passed} / {len(rows)}** materials pass ({passed / max(len(rows), 1):.0%}; "
                   f"required ≥ {PS_SHARE:.0%}): **{'met' if passed >= PS_SHARE * len(rows) else 'not met'}**.",
-                  f"- Cycles' own noise on the probe mean: RMS {rms:.2%}, largest {max(noise):.2%}.", "",
-                  "## Per material", "",
+                  f"- Cycles' own noise on the probe mean: RMS {rms:.2%}, largest {max(noise):.2%}."]
+        measured = [r for r in rows if "ps_ratio" in r]
+        if measured:
+            lo, hi = min(measured, key=lambda r: r["ps_ratio"]), max(measured, key=lambda r: r["ps_ratio"])
+            ch = max(measured, key=lambda r: r["ps_chroma"])
+            lines.append(f"- Ratios from {lo['ps_ratio']:.3f} (`{lo['name']}`) to {hi['ps_ratio']:.3f} "
+                         f"(`{hi['name']}`); largest chroma {ch['ps_chroma']:.3f} (`{ch['name']}`).")
+        lines += ["", "## Per material", "",
                   "| # | material | Cycles mean | Cycles noise | spp | PS ratio | PS chroma | PS image | PS | "
                   "Photon Splat's export notes |", "|---|---|---|---|---|---|---|---|---|---|"]
         for i, r in enumerate(rows, 1):
