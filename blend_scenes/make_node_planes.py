@@ -20,8 +20,8 @@ Each case is a material named after the case, with custom properties "ps_object"
 ("deterministic" or "noise": acceptance (a) asks 1e-3 of the mean for the first, 1 % for the noise-based
 textures: noise, voronoi, musgrave, wave with distortion, magic, white noise) and "ps_node" (the node under test).
 CASES lists them in order. Outputs that are signed are moved into [0, ...) after the node (a Math or Vector Math
-Multiply Add: `vscale` in the builders, SHIFTS for the cases found negative), since Photon Splat clamps emission at
-0 and Cycles does not; math_subtract_signed alone keeps negative values, to show that difference. Edge cases
+Multiply Add: `vscale` in the builders, SHIFTS for the cases found negative), since Photon Splat clamped emission at
+0 when this was written and Cycles does not; math_subtract_signed alone keeps negative values. Edge cases
 (division by zero, logarithms of negatives, out-of-range inverse trigonometry, min > max) are kept as Cycles
 computes them.
 
@@ -819,8 +819,8 @@ def new_scene(size):
 
 
 # Cases whose values Cycles renders negative on part of the plane, shifted into [0, ...) after the node (scale,
-# offset): Photon Splat clamps a program's emission at 0 (materials.cpp), Cycles does not, and these cases are
-# about the node. math_subtract_signed alone keeps its negative values, to show that difference.
+# offset): the core of the first measurement (9275481) clamped a program's emission at 0 (materials.cpp), Cycles
+# does not, and these cases are about the node. math_subtract_signed alone keeps its negative values.
 SHIFTS = {
     "maprange_linear": (1.0, 0.2), "maprange_stepped": (1.0, 0.2), "maprange_vector_linear": (1.0, 0.05),
     "math_arcsine_out_of_range": (1.0, 1.6), "math_arctan2": (1.0, 3.2), "math_arctangent": (1.0, 1.6),

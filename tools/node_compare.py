@@ -42,7 +42,8 @@ THRESHOLD = {"deterministic": 1e-3, "noise": 1e-2}
 EDGE = 0.1                 # a pixel differing by more than this fraction of the mean is an "edge" pixel
 MEAN_FLOOR = 1e-3
 
-# What was found by looking at a failing case (name -> text), 25 Nov 2026 at the merge of "programs: end to end".
+# What was found by looking at a failing case (name -> text), 25 Nov 2026 at the merge of "programs: end to end"
+# (9275481). main's eb5cb96, later, addresses the sRGB order, float alpha, signed emission and bump reflection.
 _SRGB_ORDER = (
     "Cycles interpolates an 8-bit sRGB image's encoded values and decodes the result (NODE_IMAGE_COMPRESS_AS_SRGB); "
     "Photon Splat decodes the texels first and then interpolates. Checked against both orders computed from the "
@@ -58,8 +59,8 @@ DIAGNOSED = {
         "image_texture op's alpha param 1), so 0.654 of it on average (the image's mean alpha is 0.65). The Alpha "
         "output agrees (`image_grid_float_alpha`)."),
     "math_subtract_signed": (
-        "Kept signed on purpose: Cycles renders negative emission as it is, the core clamps a program's emission at "
-        "0 (materials.cpp); the node's values agree where they are positive."),
+        "Kept signed on purpose: Cycles renders negative emission as it is, the core at 9275481 clamps a program's "
+        "emission at 0 (materials.cpp); ours equals max(Cycles, 0) to 9.3e-6, so the node agrees."),
     "geometry_pointiness": "Pointiness is not computed: ours is the constant 0.5.",
     "geometry_randomperisland": "Random Per Island is not computed: ours is 0 (Cycles 0.97 for the one island).",
     "bump_wave_height": (
@@ -547,7 +548,7 @@ def write_markdown(results, path):
                   "both images.", ""]
         for r in failing:
             rel = f"rel {r['rel']:.2e}" if "rel" in r else "no image"
-            lines.append(f"- `{r['name']}` ({rel}): {r.get('cause') or likely_cause(r)}")
+            lines.append(f"- `{r['name']}` ({rel}): {DIAGNOSED.get(r['name']) or r.get('cause') or likely_cause(r)}")
     path.write_text("\n".join(lines) + "\n")
     print(f"node_compare: wrote {path}")
 
