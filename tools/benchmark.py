@@ -106,10 +106,12 @@ def measure(args):
                     print(f"benchmark: {width}x{height} frame {frame_number} {photons} photons {method} "
                           f"x{repeats}", flush=True)
                     runs = []
+                    # (program_timing: absent from builds before node programs, which the tool also measures)
+                    program_timing = getattr(core, "program_timing", lambda reset: {"seconds": 0.0, "runs": 0})
                     for _ in range(repeats):
-                        core.program_timing(True)
+                        program_timing(True)
                         runs.append(render_once(frame, settings))
-                        timing = core.program_timing(True)
+                        timing = program_timing(True)
                         runs[-1][1]["seconds"]["programs (summed over threads)"] = timing["seconds"]
                         runs[-1][1]["counters"]["program_runs"] = timing["runs"]
                     image, last = runs[-1]
