@@ -93,8 +93,7 @@ glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, 
         if (!tracer.intersect(r, 0.0f, remaining, hit, kShadowRays)) return transmittance;
         if (!scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]].transparent)
             return glm::vec3(0.0f);
-        SurfacePoint s = surface_at(scene, r, hit);
-        s.ray_kind = ShaderRay::shadow;
+        const SurfacePoint s = surface_at(scene, r, hit, ShaderRay::shadow);
         const Bsdf b = shade(scene, s, -r.direction);
         transmittance *= glm::min(b.transparent, glm::vec3(1.0f));
         if (is_black(transmittance)) return glm::vec3(0.0f);

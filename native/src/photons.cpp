@@ -86,8 +86,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     for (int vertex = 0; vertex <= max_bounces; ++vertex) {
         Hit hit;
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
-        SurfacePoint s = surface_at(scene, ray, hit);
-        s.ray_kind = ShaderRay::photon;
+        const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
         if (m.lambert_only) {

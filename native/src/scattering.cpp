@@ -25,7 +25,7 @@ constexpr float kScaleUlps = 8.0f;
 
 float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
-SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
+SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit, ShaderRay kind) {
     const Instance& instance = scene.instances()[hit.instance];
     const MeshData& mesh = scene.meshes()[instance.mesh];
     const size_t t = hit.triangle;
@@ -55,6 +55,7 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit) {
     s.triangle = hit.triangle;
     s.bary = glm::vec2(hit.u, hit.v);
     s.distance = hit.t;
+    s.ray_kind = kind;
     s.material = &scene.materials()[mesh.materials[t]];
     s.rounding_scale = instance.rounding_scale;
     s.uv = glm::vec2(0.0f);

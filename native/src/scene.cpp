@@ -1,6 +1,7 @@
 #include "photonsplat/scene.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -96,10 +97,17 @@ size_t MeshData::attribute_bytes() const {
     return bytes;
 }
 
-Scene::Scene() = default;
+namespace {
+std::atomic<uint64_t> g_scene_revisions{0};
+}  // namespace
+
+Scene::Scene() { touch(); }
+
+void Scene::touch() const { revision_ = g_scene_revisions.fetch_add(1, std::memory_order_relaxed) + 1; }
 Scene::~Scene() = default;
 
 uint32_t Scene::add_material(const Material& material) {
+    touch();
     const std::string where = "material '" + material.name + "'";
     validate(material, where);
     const auto check_texture = [&](int32_t texture, const std::string& field) {
@@ -120,6 +128,7 @@ uint32_t Scene::add_material(const Material& material) {
 }
 
 uint32_t Scene::add_texture(Texture texture) {
+    touch();
     textures_.push_back(std::move(texture));
     return static_cast<uint32_t>(textures_.size() - 1);
 }
@@ -148,6 +157,7 @@ void Scene::set_background(const glm::vec3& radiance) {
 }
 
 uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
+    touch();
     const std::string where = "mesh '" + mesh.name + "'";
     if (mesh.vertex_count > 0 && mesh.vertices == nullptr) throw InvalidInput(where + ".vertices", "missing");
     if (mesh.triangle_count > 0 && mesh.triangles == nullptr) throw InvalidInput(where + ".triangles", "missing");
@@ -330,6 +340,7 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
 // far from its scene sees it small, where float's rounding at the camera's distance no longer shows), and the
 // scene stays valid for any camera and for renders that share it (the viewport).
 bool Scene::recentre() {
+    touch();
     const glm::dvec3 origin = grid_centre(placed_min_, placed_max_, origin_);
     // Beyond ±1e15 (geometry scaled up past where coordinates are accepted) the origin stays: render-space
     // coordinates of accepted positions then stay within ±2e15, far inside float's range.
@@ -358,6 +369,7 @@ void Scene::include_in_placed_box(const Instance& instance) {
 }
 
 void Scene::fit_origin() {
+    touch();
     placed_min_ = glm::dvec3(std::numeric_limits<double>::infinity());
     placed_max_ = glm::dvec3(-std::numeric_limits<double>::infinity());
     for (const Instance& instance : instances_) include_in_placed_box(instance);
@@ -370,6 +382,7 @@ void Scene::fit_origin() {
 }
 
 void Scene::set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random) {
+    touch();
     if (instance >= instances_.size())
         throw InvalidInput("instance", "is " + std::to_string(instance) + ", but the scene has " +
                                            std::to_string(instances_.size()) + " instances");
@@ -392,6 +405,7 @@ uint32_t Scene::attribute_id(const std::string& name) {
 }
 
 uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const std::string& name, uint32_t visibility) {
+    touch();
     const std::string label = name.empty() ? (mesh < meshes_.size() ? meshes_[mesh].name : std::string("?")) : name;
     const std::string where = "instance '" + label + "'";
     if (mesh >= meshes_.size())
@@ -416,6 +430,7 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const st
 }
 
 void Scene::set_instance_transform(uint32_t id, const glm::dmat4& to_world) {
+    touch();
     if (id >= instances_.size())
         throw InvalidInput("instance", "id " + std::to_string(id) + " out of range (the scene has " +
                                            std::to_string(instances_.size()) + " instances)");

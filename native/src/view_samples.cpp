@@ -140,8 +140,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (!path.after_lobe) p.emitted += path.throughput * scene.background();
             return;
         }
-        SurfacePoint s = surface_at(scene, ray, hit);
-        if (!from_camera) s.ray_kind = ShaderRay::reflected;
+        const SurfacePoint s = surface_at(scene, ray, hit, from_camera ? ShaderRay::camera : ShaderRay::reflected);
         if (from_camera) {
             if (s.material->holdout) return;  // cut out: alpha stays 0, nothing is added
             p.first.alpha = 1.0f;

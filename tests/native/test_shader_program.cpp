@@ -375,3 +375,24 @@ TEST(ShaderProgram, BumpedNormalsKeepReflectionsAboveTheSurface) {
     EXPECT_NEAR(glm::dot(ng, 2.0f * glm::dot(fixed, i) * fixed - i), threshold, 1e-4f);
     EXPECT_NEAR(fixed.y, 0.0f, 1e-6f);  // turned in the plane of n and ng only
 }
+
+TEST(ShaderProgram, RepeatedRunsAtOnePointFollowTheSceneWhenItChanges) {
+    // A point shaded twice in a row reuses the first run (surface_at's normal, then shade's closures); moving the
+    // instance in between must not: the scene's revision is part of what the reuse compares.
+    Scene scene;
+    ProgramWriter w;
+    const auto geometry = w.op(ShaderOp::geometry, {0}, {}, {true, false, false, false, false, false, false, false, false});
+    w.output(ProgramTarget::emission, 0, geometry[0]);
+    Material m = diffuse_closures("position");
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    const uint32_t quad = add_quad(scene, material, scene.attribute_id("Col"));
+    const uint32_t instance = scene.add_instance(quad, glm::mat4(1.0f));
+    const SurfacePoint before = hit_at(scene, 0.1f, 0.2f);
+    expect_vec_near(emission_at(scene, before, glm::vec3(0, 0, 1)), glm::vec3(0.1f, 0.2f, 0.0f), 1e-5f);
+    expect_vec_near(emission_at(scene, before, glm::vec3(0, 0, 1)), glm::vec3(0.1f, 0.2f, 0.0f), 1e-5f);
+    scene.set_instance_transform(instance, glm::dmat4(glm::translate(glm::mat4(1.0f), glm::vec3(0, 0, 1))));
+    SurfacePoint moved = before;  // the same triangle and barycentrics, now 1 higher
+    moved.position.z += 1.0f;
+    expect_vec_near(emission_at(scene, moved, glm::vec3(0, 0, 1)), glm::vec3(0.1f, 0.2f, 1.0f), 1e-5f);
+}

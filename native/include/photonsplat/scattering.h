@@ -31,13 +31,14 @@ struct SurfacePoint {
     float distance = 0.0f;       // along the ray that found it
     glm::vec3 smooth_normal{0.0f};  // the interpolated normal before a program's Bump or Normal Map (= shading_normal
                                     // for materials without one), on the side of geometric_normal
-    ShaderRay ray_kind = ShaderRay::camera;  // what arrived, for Light Path nodes (callers set it)
+    ShaderRay ray_kind = ShaderRay::camera;  // what arrived, for Light Path nodes
 };
 
 // Resolves a hit (instance + triangle + barycentrics) to a world-space surface point: position, normals
 // (through the instance's normal matrix, then a program's Bump or Normal Map), UV. The one place where hits
 // become surfaces, for camera paths, shadow-ray origins and photon paths alike.
-SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit);
+// `kind`: what the ray is, for Light Path nodes.
+SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit, ShaderRay kind = ShaderRay::camera);
 
 // Whether the hit lies on the inside of a transmitting surface (its back face: inside rough glass, behind a
 // translucent pane), where photons and view samples are kept apart from those outside (kInsidePhoton,

@@ -170,8 +170,15 @@ public:
     const std::vector<std::string>& attribute_names() const { return attribute_names_; }
     // The camera that Camera Data and the camera / window texture coordinates see: each render sets it from its
     // own camera before shading (two renders of one scene with different cameras must not run at once).
-    void set_shader_camera(const ShaderCamera& camera) const { shader_camera_ = camera; }
+    void set_shader_camera(const ShaderCamera& camera) const {
+        shader_camera_ = camera;
+        touch();
+    }
     const ShaderCamera& shader_camera() const { return shader_camera_; }
+    // Changes with every change of what a shader program reads (materials, textures, instances and their
+    // transforms, the origin, the shader camera), and differs between any two scenes: a cache of program results
+    // keyed by it never outlives what it was computed from.
+    uint64_t revision() const { return revision_; }
 
     const std::vector<Material>& materials() const { return materials_; }
     const std::vector<Texture>& textures() const { return textures_; }
@@ -207,6 +214,8 @@ private:
     glm::vec3 background_{0.0f};
     std::vector<std::string> attribute_names_;
     mutable ShaderCamera shader_camera_;
+    mutable uint64_t revision_ = 0;
+    void touch() const;  // a new revision_
     glm::dvec3 origin_{0.0};
     // World-space box of the instances as placed by add_instance (and as they are after fit_origin), in double.
     glm::dvec3 placed_min_{std::numeric_limits<double>::infinity()};

@@ -72,8 +72,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
             for (int bounce = 0; bounce <= max_specular_bounces; ++bounce) {
                 Hit hit;
                 if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
-                SurfacePoint s = surface_at(scene, ray, hit);
-                s.ray_kind = ShaderRay::photon;
+                const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
                 // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).

@@ -132,8 +132,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             radiance += throughput * scene.background();  // the world: BSDF sampling only, weight 1
             break;
         }
-        SurfacePoint s = surface_at(scene, ray, hit);
-        if (depth > 0) s.ray_kind = ShaderRay::reflected;
+        const SurfacePoint s = surface_at(scene, ray, hit, depth > 0 ? ShaderRay::reflected : ShaderRay::camera);
         const Material& m = *s.material;
         if (m.emission != glm::vec3(0.0f) || m.program_emission) {
             // Emissive triangles are one source of the path tracer (never photon-mapped).

@@ -131,16 +131,46 @@ ProgramTiming program_timing(bool reset) {
     return t;
 }
 
+// The last run on this thread: a hit is usually shaded right after surface_at ran its program for the normal
+// (Bump), or its emission was read just before, with the same point and direction; the second call copies.
+struct LastRun {
+    const Material* material = nullptr;
+    uint64_t revision = 0;  // Scene::revision(): unique over every scene and every change that moves a value
+    uint32_t instance = 0, triangle = 0;
+    glm::vec2 bary{0.0f};
+    glm::vec3 wo{0.0f};
+    ShaderRay kind = ShaderRay::camera;
+    ProgrammedMaterial result;
+
+    bool same(const Scene& sc, const SurfacePoint& s, const glm::vec3& w) const {
+        return revision == sc.revision() && material == s.material && instance == s.instance && triangle == s.triangle &&
+               bary == s.bary && wo == w && kind == s.ray_kind;
+    }
+};
+
 void run_material_program(const Scene& scene, const SurfacePoint& s, const glm::vec3& wo, ProgrammedMaterial& out) {
-    if (!kTimePrograms) {
-        run_and_apply(scene, s, wo, out);
+    thread_local LastRun last;
+    if (last.same(scene, s, wo)) {
+        out = last.result;
         return;
     }
-    const auto start = std::chrono::steady_clock::now();
-    run_and_apply(scene, s, wo, out);
-    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start);
-    g_program_runs.fetch_add(1, std::memory_order_relaxed);
-    g_program_nanoseconds.fetch_add(static_cast<uint64_t>(ns.count()), std::memory_order_relaxed);
+    if (!kTimePrograms) {
+        run_and_apply(scene, s, wo, out);
+    } else {
+        const auto start = std::chrono::steady_clock::now();
+        run_and_apply(scene, s, wo, out);
+        const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start);
+        g_program_runs.fetch_add(1, std::memory_order_relaxed);
+        g_program_nanoseconds.fetch_add(static_cast<uint64_t>(ns.count()), std::memory_order_relaxed);
+    }
+    last.material = s.material;
+    last.revision = scene.revision();
+    last.instance = s.instance;
+    last.triangle = s.triangle;
+    last.bary = s.bary;
+    last.wo = wo;
+    last.kind = s.ray_kind;
+    last.result = out;
 }
 
 namespace {
