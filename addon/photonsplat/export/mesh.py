@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import compat
+from .shader_program import POINTINESS, RANDOM_PER_ISLAND
 
 # Geometry we cannot render yet: skipped with a note (other non-mesh types, e.g. empties, have no surface).
 UNSUPPORTED_TYPES = {'CURVES', 'POINTCLOUD', 'VOLUME', 'GPENCIL'}
@@ -134,6 +135,11 @@ def default_color_name(mesh):
 def attribute_array(mesh, name, count):
     """Attribute `name` of `mesh` as float32 (vertices, k) or (triangles, 3, k); None if the mesh has none
     ("" is the default colour attribute). UV maps by name are (triangles, 3, 2)."""
+    if name == POINTINESS:
+        return pointiness(_vertex_array(mesh.vertices, "co"), _vertex_array(mesh.vertices, "normal"),
+                          _edges(mesh))[:, None]
+    if name == RANDOM_PER_ISLAND:
+        return _random_per_island(mesh, count)
     if name == "":
         name = default_color_name(mesh)
         if name is None:
@@ -188,3 +194,103 @@ def scene_material_ids(slots, slot_material_ids):
     """
     table = np.asarray(slot_material_ids, dtype=np.int32)
     return table[np.clip(slots, 0, len(table) - 1)]
+
+
+# --- the Geometry node's Pointiness and Random Per Island, as Cycles 3.4's Blender sync computes them -------------
+# (intern/cycles/blender/mesh.cpp: attr_create_pointiness, attr_create_random_per_island), on the evaluated mesh's
+# own vertices and edges.
+
+_FLT_EPSILON = np.float32(np.finfo(np.float32).eps)
+
+
+def _vertex_array(vertices, prop):
+    values = np.empty(len(vertices) * 3, dtype=np.float32)
+    vertices.foreach_get(prop, values)
+    return values.reshape(-1, 3)
+
+
+def _edges(mesh):
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    return edges.reshape(-1, 2)
+
+
+def _random_per_island(mesh, count):
+    """Per triangle corner (M, 3, 1): the island value of each triangle's first vertex (the core's
+    random_per_island: a disjoint set joined along Blender's edges in order, whose roots decide the hash)."""
+    from .. import _core
+    per_vertex = np.asarray(_core.random_per_island(len(mesh.vertices), _edges(mesh)), dtype=np.float32)
+    triangles = np.empty(count * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    first = per_vertex[triangles.reshape(count, 3)[:, 0]]
+    return np.ascontiguousarray(np.repeat(first[:, None, None], 3, axis=1))
+
+
+def merged_vertices(positions):
+    """Cycles' welding of coincident vertices before pointiness: each vertex's representative. Vertices are sorted
+    by the sum of their coordinates (equal positions by decreasing index); a vertex points at the first later one
+    in that order whose sum is within 3 FLT_EPSILON and whose squared distance is below FLT_EPSILON; chains are
+    followed to their end."""
+    n = len(positions)
+    sums = (positions[:, 0] + positions[:, 1]) + positions[:, 2]          # float32, Cycles' order of additions
+    order = np.lexsort((-np.arange(n), sums))
+    sorted_sums = sums[order]
+    sorted_positions = positions[order]
+    target = np.full(n, -1, dtype=np.int64)                               # in sorted positions
+    pending = np.arange(n - 1)
+    k = 1
+    while len(pending):
+        pending = pending[pending + k < n]
+        near = (sorted_sums[pending + k] - sorted_sums[pending]) <= 3 * _FLT_EPSILON
+        pending = pending[near]
+        d = sorted_positions[pending + k] - sorted_positions[pending]
+        found = np.einsum("ij,ij->i", d, d) < _FLT_EPSILON
+        target[pending[found]] = pending[found] + k
+        pending = pending[~found]
+        k += 1
+    orig = np.arange(n)
+    has = target >= 0
+    orig[order[has]] = order[target[has]]
+    while True:                                                           # follow chains (pointer jumping)
+        nxt = orig[orig]
+        if np.array_equal(nxt, orig):
+            return orig
+        orig = nxt
+
+
+def pointiness(positions, normals, edges):
+    """Cycles' Pointiness per vertex (float32 (N,)): the angle between the (welded) vertex normal and the mean
+    direction of its edges over pi, then averaged with its edge neighbours'."""
+    positions = np.asarray(positions, dtype=np.float32).reshape(-1, 3)
+    normals = np.asarray(normals, dtype=np.float32).reshape(-1, 3)
+    n = len(positions)
+    if n == 0:
+        return np.zeros(0, dtype=np.float32)
+    orig = merged_vertices(positions)
+    # Welded normals: the sum over the duplicates, normalised.
+    summed = np.zeros((n, 3), dtype=np.float64)
+    np.add.at(summed, orig, normals)
+    length = np.linalg.norm(summed, axis=1, keepdims=True)
+    welded = np.divide(summed, length, out=np.zeros_like(summed), where=length > 0)
+    # Each edge between welded vertices once (either direction).
+    e = orig[np.asarray(edges, dtype=np.int64).reshape(-1, 2)]
+    if len(e):
+        key = np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1])
+        _, first = np.unique(key, return_index=True)
+        e = e[np.sort(first)]
+    v0, v1 = e[:, 0], e[:, 1]
+    d = (positions[v1] - positions[v0]).astype(np.float64)
+    length = np.linalg.norm(d, axis=1, keepdims=True)
+    d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
+    accum = np.zeros((n, 3), dtype=np.float64)
+    np.add.at(accum, v0, d)
+    np.add.at(accum, v1, -d)
+    counter = np.bincount(v0, minlength=n) + np.bincount(v1, minlength=n)
+    raw = np.zeros(n, dtype=np.float64)
+    keep = (orig == np.arange(n)) & (counter > 0)
+    mean = accum[keep] / counter[keep][:, None]
+    raw[keep] = np.arccos(np.clip(np.einsum("ij,ij->i", welded[keep], mean), -1.0, 1.0)) / np.pi
+    # Blur over the one-ring: each vertex with its neighbours, equally weighted.
+    blurred = raw + np.bincount(v0, weights=raw[v1], minlength=n) + np.bincount(v1, weights=raw[v0], minlength=n)
+    blurred /= counter + 1
+    return blurred[orig].astype(np.float32)
