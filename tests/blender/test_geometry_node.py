@@ -168,3 +168,40 @@ def test_a_pointiness_program_renders(empty_scene, core):
     image, _ = core.render(frame.scene, frame.camera, frame.settings)
     rgb = np.asarray(image)[..., :3]
     assert rgb.mean() == pytest.approx(CUBE_CORNER, rel=1e-3), rgb.mean()
+
+
+def _merged_by_cycles_scan(positions):
+    """Cycles' weld written as its loop: sorted by coordinate sum (equal positions by decreasing index), each vertex
+    points at the first later one within 3 FLT_EPSILON of sum and FLT_EPSILON of squared distance."""
+    eps = np.float32(np.finfo(np.float32).eps)
+    p = np.asarray(positions, dtype=np.float32)
+    sums = (p[:, 0] + p[:, 1]) + p[:, 2]
+    order = np.lexsort((-np.arange(len(p)), sums)).tolist()
+    orig = list(range(len(p)))
+    for a, v in enumerate(order):
+        for w in order[a + 1:]:
+            if sums[w] - sums[v] > 3 * eps:
+                break
+            d = p[w] - p[v]
+            if np.float32(d @ d) < eps:
+                orig[v] = w
+                break
+    for v in range(len(p)):
+        while orig[orig[v]] != orig[v]:
+            orig[v] = orig[orig[v]]
+    return orig
+
+
+def test_the_weld_is_cycles_scan_where_many_vertices_share_a_sum():
+    """A flat grid's diagonals share their coordinate sum, which sends the weld to its cell search: planted exact
+    and near duplicates (some welded, some just too far) come out as Cycles' scan finds them."""
+    rng = np.random.default_rng(7)
+    x, y = np.meshgrid(np.linspace(-1, 1, 12), np.linspace(-1, 1, 12))
+    grid = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1).astype(np.float32)
+    picked = grid[rng.integers(0, len(grid), size=40)]
+    jitter = rng.normal(size=picked.shape).astype(np.float32) * np.repeat(
+        np.float32([0.0, 1e-8, 1e-7, 1e-4]), 10)[:, None]
+    positions = np.vstack([grid, picked, picked + jitter])[rng.permutation(len(grid) + 80)]
+    merged = mesh_export.merged_vertices(positions)
+    assert merged.tolist() == _merged_by_cycles_scan(positions)
+    assert (merged != np.arange(len(positions))).sum() >= 40

@@ -227,30 +227,72 @@ def _random_per_island(mesh, count):
 
 
 def merged_vertices(positions):
-    """Cycles' welding of coincident vertices before pointiness: each vertex's representative. Vertices are sorted
-    by the sum of their coordinates (equal positions by decreasing index); a vertex points at the first later one
-    in that order whose sum is within 3 FLT_EPSILON and whose squared distance is below FLT_EPSILON; chains are
-    followed to their end."""
+    """Cycles' welding of coincident vertices before pointiness: each vertex's representative. Cycles sorts the
+    vertices by the sum of their coordinates (equal positions by decreasing index) and points each at the first
+    later one in that order whose sum is within 3 FLT_EPSILON and whose squared distance is below FLT_EPSILON,
+    then follows the chains to their end. Scanning the sum order is quadratic where many vertices share a sum (a
+    flat grid's diagonals), so the candidates come from a grid of cells 2 sqrt(FLT_EPSILON) wide instead: a
+    vertex closer than sqrt(FLT_EPSILON) lies in its own cell or in the neighbour on the near side along each
+    axis (8 cells); among the candidates that pass Cycles' two tests the first later one in the order is taken."""
     n = len(positions)
+    orig = np.arange(n)
+    if n < 2:
+        return orig
+    positions = np.asarray(positions, dtype=np.float32)
     sums = (positions[:, 0] + positions[:, 1]) + positions[:, 2]          # float32, Cycles' order of additions
     order = np.lexsort((-np.arange(n), sums))
-    sorted_sums = sums[order]
-    sorted_positions = positions[order]
-    target = np.full(n, -1, dtype=np.int64)                               # in sorted positions
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    best = np.full(n, n, dtype=np.int64)                                  # the matching vertex of least rank
+    # Cycles' own scan for a few steps settles most vertices (a sum shared by no close neighbour)...
+    sorted_sums, sorted_positions = sums[order], positions[order]
     pending = np.arange(n - 1)
-    k = 1
-    while len(pending):
+    for k in range(1, 9):
         pending = pending[pending + k < n]
-        near = (sorted_sums[pending + k] - sorted_sums[pending]) <= 3 * _FLT_EPSILON
-        pending = pending[near]
+        pending = pending[sorted_sums[pending + k] - sorted_sums[pending] <= 3 * _FLT_EPSILON]
         d = sorted_positions[pending + k] - sorted_positions[pending]
         found = np.einsum("ij,ij->i", d, d) < _FLT_EPSILON
-        target[pending[found]] = pending[found] + k
+        best[order[pending[found]]] = order[pending[found] + k]
         pending = pending[~found]
-        k += 1
-    orig = np.arange(n)
-    has = target >= 0
-    orig[order[has]] = order[target[has]]
+        if len(pending) == 0:
+            break
+    # ... the rest (still within the window of a later one) look among their cells' vertices.
+    todo = np.zeros(n, dtype=bool)
+    todo[order[pending]] = len(pending) > 0 and k == 8
+    scaled = positions.astype(np.float64) / (2.0 * np.sqrt(np.float64(_FLT_EPSILON)))
+    cell = np.floor(scaled).astype(np.int64)
+    near_side = np.where(scaled - cell < 0.5, -1, 1)
+
+    def key(c):
+        return (c[:, 0] * 73856093) ^ (c[:, 1] * 19349663) ^ (c[:, 2] * 83492791)
+    keys = key(cell)
+    by_key = np.argsort(keys, kind="stable")
+    sorted_keys = keys[by_key]
+    rows = np.nonzero(todo)[0]
+    for corner in range(8 if len(rows) else 0):
+        offset = np.stack([near_side[rows, a] * ((corner >> a) & 1) for a in range(3)], axis=1)
+        wanted = key(cell[rows] + offset)
+        lo = np.searchsorted(sorted_keys, wanted, side="left")
+        hi = np.searchsorted(sorted_keys, wanted, side="right")
+        counts = hi - lo
+        i = np.repeat(rows, counts)
+        if len(i) == 0:
+            continue
+        within = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)
+        j = by_key[np.repeat(lo, counts) + within]
+        d = positions[j] - positions[i]
+        ok = ((rank[j] > rank[i]) & (sums[j] - sums[i] <= 3 * _FLT_EPSILON)
+              & (np.einsum("ij,ij->i", d, d) < _FLT_EPSILON))
+        i, j = i[ok], j[ok]
+        if len(i):
+            current = np.full(n, np.iinfo(np.int64).max)        # (the scan's finds are never beaten here)
+            np.minimum.at(current, i, rank[j])
+            better = current < np.where(best < n, rank[np.minimum(best, n - 1)], np.iinfo(np.int64).max)
+            by_rank = np.empty(n, dtype=np.int64)
+            by_rank[rank] = np.arange(n)
+            best[better] = by_rank[current[better]]
+    has = best < n
+    orig[has] = best[has]
     while True:                                                           # follow chains (pointer jumping)
         nxt = orig[orig]
         if np.array_equal(nxt, orig):
@@ -268,8 +310,7 @@ def pointiness(positions, normals, edges):
         return np.zeros(0, dtype=np.float32)
     orig = merged_vertices(positions)
     # Welded normals: the sum over the duplicates, normalised.
-    summed = np.zeros((n, 3), dtype=np.float64)
-    np.add.at(summed, orig, normals)
+    summed = np.stack([np.bincount(orig, weights=normals[:, a], minlength=n) for a in range(3)], axis=1)
     length = np.linalg.norm(summed, axis=1, keepdims=True)
     welded = np.divide(summed, length, out=np.zeros_like(summed), where=length > 0)
     # Each edge between welded vertices once (either direction).
@@ -282,9 +323,8 @@ def pointiness(positions, normals, edges):
     d = (positions[v1] - positions[v0]).astype(np.float64)
     length = np.linalg.norm(d, axis=1, keepdims=True)
     d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
-    accum = np.zeros((n, 3), dtype=np.float64)
-    np.add.at(accum, v0, d)
-    np.add.at(accum, v1, -d)
+    accum = np.stack([np.bincount(v0, weights=d[:, a], minlength=n) - np.bincount(v1, weights=d[:, a], minlength=n)
+                      for a in range(3)], axis=1)
     counter = np.bincount(v0, minlength=n) + np.bincount(v1, minlength=n)
     raw = np.zeros(n, dtype=np.float64)
     keep = (orig == np.arange(n)) & (counter > 0)
