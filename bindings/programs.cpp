@@ -11,6 +11,7 @@
 #include "bindings.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/material_program.h"
+#include "photonsplat/mesh_islands.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shader_program.h"
 
@@ -94,6 +95,25 @@ void bind_programs(py::module_& m) {
         "reset"_a = true,
         "Runs of material programs and their time summed over threads since the last reset; measured only when "
         "the process started with PHOTONSPLAT_PROGRAM_TIMING set (tools/benchmark.py --program-timing).");
+    m.def(
+        "random_per_island",
+        [](size_t num_vertices, const py::object& edges_obj) {
+            const auto edges = index_array(edges_obj, "edges");
+            if (edges.size() != 0 && (edges.ndim() != 2 || edges.shape(1) != 2))
+                throw ps::InvalidInput("edges", "must be (E, 2) vertex indices");
+            const size_t count = edges.size() / 2;
+            std::vector<float> values;
+            {
+                py::gil_scoped_release release;
+                values = ps::random_per_island(num_vertices, edges.data(), count);
+            }
+            py::array_t<float> out(static_cast<py::ssize_t>(values.size()));
+            if (!values.empty()) std::memcpy(out.mutable_data(), values.data(), values.size() * sizeof(float));
+            return out;
+        },
+        "num_vertices"_a, "edges"_a,
+        "Cycles' Random Per Island of each vertex (float32 (N,)): hash_uint_to_float of the root of its island in "
+        "a disjoint set joined along `edges` ((E, 2) int32, Blender's edge order), as Cycles 3.4's Blender sync.");
     auto scene = py::reinterpret_borrow<py::class_<ps::Scene>>(m.attr("Scene"));
     scene
         .def("attribute_id", &ps::Scene::attribute_id, "name"_a,

@@ -61,8 +61,6 @@ DIAGNOSED = {
     "math_subtract_signed": (
         "Kept signed on purpose: Cycles renders negative emission as it is, the core at 9275481 clamps a program's "
         "emission at 0 (materials.cpp); ours equals max(Cycles, 0) to 9.3e-6, so the node agrees."),
-    "geometry_pointiness": "Pointiness is not computed: ours is the constant 0.5.",
-    "geometry_randomperisland": "Random Per Island is not computed: ours is 0 (Cycles 0.97 for the one island).",
     "bump_wave_height": (
         "Bump of a height with an 11-pixel period (a scale-1.5 wave) on the dome: ours tilts the normal 2 degrees "
         "more on average (39.4 against 37.4 degrees from +Z) while smooth heights agree to 5e-6 (`bump_checker_height`, "

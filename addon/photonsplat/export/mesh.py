@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import compat
+from .shader_program import POINTINESS, RANDOM_PER_ISLAND
 
 # Geometry we cannot render yet: skipped with a note (other non-mesh types, e.g. empties, have no surface).
 UNSUPPORTED_TYPES = {'CURVES', 'POINTCLOUD', 'VOLUME', 'GPENCIL'}
@@ -134,6 +135,11 @@ def default_color_name(mesh):
 def attribute_array(mesh, name, count):
     """Attribute `name` of `mesh` as float32 (vertices, k) or (triangles, 3, k); None if the mesh has none
     ("" is the default colour attribute). UV maps by name are (triangles, 3, 2)."""
+    if name == POINTINESS:
+        return pointiness(_vertex_array(mesh.vertices, "co"), _vertex_array(mesh.vertices, "normal"),
+                          _edges(mesh))[:, None]
+    if name == RANDOM_PER_ISLAND:
+        return _random_per_island(mesh, count)
     if name == "":
         name = default_color_name(mesh)
         if name is None:
@@ -188,3 +194,143 @@ def scene_material_ids(slots, slot_material_ids):
     """
     table = np.asarray(slot_material_ids, dtype=np.int32)
     return table[np.clip(slots, 0, len(table) - 1)]
+
+
+# --- the Geometry node's Pointiness and Random Per Island, as Cycles 3.4's Blender sync computes them -------------
+# (intern/cycles/blender/mesh.cpp: attr_create_pointiness, attr_create_random_per_island), on the evaluated mesh's
+# own vertices and edges.
+
+_FLT_EPSILON = np.float32(np.finfo(np.float32).eps)
+
+
+def _vertex_array(vertices, prop):
+    values = np.empty(len(vertices) * 3, dtype=np.float32)
+    vertices.foreach_get(prop, values)
+    return values.reshape(-1, 3)
+
+
+def _edges(mesh):
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    return edges.reshape(-1, 2)
+
+
+def _random_per_island(mesh, count):
+    """Per triangle corner (M, 3, 1): the island value of each triangle's first vertex (the core's
+    random_per_island: a disjoint set joined along Blender's edges in order, whose roots decide the hash)."""
+    from .. import _core
+    per_vertex = np.asarray(_core.random_per_island(len(mesh.vertices), _edges(mesh)), dtype=np.float32)
+    triangles = np.empty(count * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", triangles)
+    first = per_vertex[triangles.reshape(count, 3)[:, 0]]
+    return np.ascontiguousarray(np.repeat(first[:, None, None], 3, axis=1))
+
+
+def merged_vertices(positions):
+    """Cycles' welding of coincident vertices before pointiness: each vertex's representative. Cycles sorts the
+    vertices by the sum of their coordinates (equal positions by decreasing index) and points each at the first
+    later one in that order whose sum is within 3 FLT_EPSILON and whose squared distance is below FLT_EPSILON,
+    then follows the chains to their end. Scanning the sum order is quadratic where many vertices share a sum (a
+    flat grid's diagonals), so the candidates come from a grid of cells 2 sqrt(FLT_EPSILON) wide instead: a
+    vertex closer than sqrt(FLT_EPSILON) lies in its own cell or in the neighbour on the near side along each
+    axis (8 cells); among the candidates that pass Cycles' two tests the first later one in the order is taken."""
+    n = len(positions)
+    orig = np.arange(n)
+    if n < 2:
+        return orig
+    positions = np.asarray(positions, dtype=np.float32)
+    sums = (positions[:, 0] + positions[:, 1]) + positions[:, 2]          # float32, Cycles' order of additions
+    order = np.lexsort((-np.arange(n), sums))
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+    best = np.full(n, n, dtype=np.int64)                                  # the matching vertex of least rank
+    # Cycles' own scan for a few steps settles most vertices (a sum shared by no close neighbour)...
+    sorted_sums, sorted_positions = sums[order], positions[order]
+    pending = np.arange(n - 1)
+    for k in range(1, 9):
+        pending = pending[pending + k < n]
+        pending = pending[sorted_sums[pending + k] - sorted_sums[pending] <= 3 * _FLT_EPSILON]
+        d = sorted_positions[pending + k] - sorted_positions[pending]
+        found = np.einsum("ij,ij->i", d, d) < _FLT_EPSILON
+        best[order[pending[found]]] = order[pending[found] + k]
+        pending = pending[~found]
+        if len(pending) == 0:
+            break
+    # ... the rest (still within the window of a later one) look among their cells' vertices.
+    todo = np.zeros(n, dtype=bool)
+    todo[order[pending]] = len(pending) > 0 and k == 8
+    scaled = positions.astype(np.float64) / (2.0 * np.sqrt(np.float64(_FLT_EPSILON)))
+    cell = np.floor(scaled).astype(np.int64)
+    near_side = np.where(scaled - cell < 0.5, -1, 1)
+
+    def key(c):
+        return (c[:, 0] * 73856093) ^ (c[:, 1] * 19349663) ^ (c[:, 2] * 83492791)
+    keys = key(cell)
+    by_key = np.argsort(keys, kind="stable")
+    sorted_keys = keys[by_key]
+    rows = np.nonzero(todo)[0]
+    for corner in range(8 if len(rows) else 0):
+        offset = np.stack([near_side[rows, a] * ((corner >> a) & 1) for a in range(3)], axis=1)
+        wanted = key(cell[rows] + offset)
+        lo = np.searchsorted(sorted_keys, wanted, side="left")
+        hi = np.searchsorted(sorted_keys, wanted, side="right")
+        counts = hi - lo
+        i = np.repeat(rows, counts)
+        if len(i) == 0:
+            continue
+        within = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)
+        j = by_key[np.repeat(lo, counts) + within]
+        d = positions[j] - positions[i]
+        ok = ((rank[j] > rank[i]) & (sums[j] - sums[i] <= 3 * _FLT_EPSILON)
+              & (np.einsum("ij,ij->i", d, d) < _FLT_EPSILON))
+        i, j = i[ok], j[ok]
+        if len(i):
+            current = np.full(n, np.iinfo(np.int64).max)        # (the scan's finds are never beaten here)
+            np.minimum.at(current, i, rank[j])
+            better = current < np.where(best < n, rank[np.minimum(best, n - 1)], np.iinfo(np.int64).max)
+            by_rank = np.empty(n, dtype=np.int64)
+            by_rank[rank] = np.arange(n)
+            best[better] = by_rank[current[better]]
+    has = best < n
+    orig[has] = best[has]
+    while True:                                                           # follow chains (pointer jumping)
+        nxt = orig[orig]
+        if np.array_equal(nxt, orig):
+            return orig
+        orig = nxt
+
+
+def pointiness(positions, normals, edges):
+    """Cycles' Pointiness per vertex (float32 (N,)): the angle between the (welded) vertex normal and the mean
+    direction of its edges over pi, then averaged with its edge neighbours'."""
+    positions = np.asarray(positions, dtype=np.float32).reshape(-1, 3)
+    normals = np.asarray(normals, dtype=np.float32).reshape(-1, 3)
+    n = len(positions)
+    if n == 0:
+        return np.zeros(0, dtype=np.float32)
+    orig = merged_vertices(positions)
+    # Welded normals: the sum over the duplicates, normalised.
+    summed = np.stack([np.bincount(orig, weights=normals[:, a], minlength=n) for a in range(3)], axis=1)
+    length = np.linalg.norm(summed, axis=1, keepdims=True)
+    welded = np.divide(summed, length, out=np.zeros_like(summed), where=length > 0)
+    # Each edge between welded vertices once (either direction).
+    e = orig[np.asarray(edges, dtype=np.int64).reshape(-1, 2)]
+    if len(e):
+        key = np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1])
+        _, first = np.unique(key, return_index=True)
+        e = e[np.sort(first)]
+    v0, v1 = e[:, 0], e[:, 1]
+    d = (positions[v1] - positions[v0]).astype(np.float64)
+    length = np.linalg.norm(d, axis=1, keepdims=True)
+    d = np.divide(d, length, out=np.zeros_like(d), where=length > 0)
+    accum = np.stack([np.bincount(v0, weights=d[:, a], minlength=n) - np.bincount(v1, weights=d[:, a], minlength=n)
+                      for a in range(3)], axis=1)
+    counter = np.bincount(v0, minlength=n) + np.bincount(v1, minlength=n)
+    raw = np.zeros(n, dtype=np.float64)
+    keep = (orig == np.arange(n)) & (counter > 0)
+    mean = accum[keep] / counter[keep][:, None]
+    raw[keep] = np.arccos(np.clip(np.einsum("ij,ij->i", welded[keep], mean), -1.0, 1.0)) / np.pi
+    # Blur over the one-ring: each vertex with its neighbours, equally weighted.
+    blurred = raw + np.bincount(v0, weights=raw[v1], minlength=n) + np.bincount(v1, weights=raw[v0], minlength=n)
+    blurred /= counter + 1
+    return blurred[orig].astype(np.float32)

@@ -33,6 +33,11 @@ LUMINANCE = (0.2126, 0.7152, 0.0722)
 # Cycles bakes colour ramps and curves into this many entries (RAMP_TABLE_SIZE).
 TABLE_SIZE = 256
 
+# The Geometry node's Pointiness (per vertex) and Random Per Island (per face) are mesh attributes that the mesh
+# export computes as Cycles' Blender sync does (export/mesh.py), under names no Blender attribute can have.
+POINTINESS = "\x01pointiness"
+RANDOM_PER_ISLAND = "\x01random_per_island"
+
 # Cycles renders an Image Texture node without an image in magenta.
 MISSING_IMAGE_COLOR = (1.0, 0.0, 1.0)
 
@@ -567,7 +572,7 @@ def _texco_default(b, kind):
     if kind == "uv":
         return b.emit("uv_map", [b.bump, -1], [])[0]
     if kind == "position":
-        return b.emit("geometry", [b.bump], [])[0]
+        return b.emit("geometry", [b.bump, -1, -1], [])[0]
     b.uses_texspace = True
     return b.emit("texture_coordinate", [b.bump, -1], [])[0]
 
@@ -590,7 +595,7 @@ def _normal_input(b, node, stack, key="Normal"):
         out, _, _ = follow(socket, stack)
         if out is not None:
             return b.value_of(socket, stack), True
-    return b.emit("geometry", [b.bump], [])[1], False
+    return b.emit("geometry", [b.bump, -1, -1], [])[1], False
 
 
 def _n_value(b, node, stack):
@@ -640,7 +645,12 @@ def _n_vertex_color(b, node, stack):
 
 
 def _n_geometry(b, node, stack):
-    regs = b.emit("geometry", [b.bump], [])
+    # Pointiness and Random Per Island cost the mesh export a pass over its edges: asked for only when linked.
+    params = [b.bump]
+    for socket, name in (("Pointiness", POINTINESS), ("Random Per Island", RANDOM_PER_ISLAND)):
+        output = _socket(node.outputs, socket)
+        params.append(b.attribute(name) if output is not None and output.is_linked else -1)
+    regs = b.emit("geometry", params, [])
     return _outs(["Position", "Normal", "Tangent", "True Normal", "Incoming", "Parametric", "Backfacing",
                   "Pointiness", "Random Per Island"], regs)
 

@@ -41,8 +41,10 @@ namespace ps {
     X(texture_coordinate, 2, "",      "vvvvvvv") /* generated, normal, uv, object, camera, window, reflection */  \
     X(uv_map,            2, "",       "v")   /* params: bump, attribute id (-1: the render UV map) */              \
     X(attribute,         2, "",       "vvff") /* params: bump, attribute id; color, vector, fac, alpha */          \
-    X(geometry,          1, "",       "vvvvvvfff") /* params: bump; position, normal, tangent, true normal,     */ \
-                                                   /* incoming, parametric, backfacing, pointiness, random      */ \
+    X(geometry,          3, "",       "vvvvvvfff") /* params: bump, pointiness attribute id, random per island */ \
+                                                   /* attribute id (-1: absent, 0 as Cycles' missing attribute);*/ \
+                                                   /* position, normal, tangent, true normal, incoming,         */ \
+                                                   /* parametric, backfacing, pointiness, random per island     */ \
     X(object_info,       0, "",       "vvffff") /* location, color, alpha, object index, material index (always */ \
                                               /* 0: the compiler substitutes the material's constant), random */  \
     X(light_path,        0, "",       "fffffffffffff") /* camera, shadow, diffuse, glossy, singular, reflection, */ \

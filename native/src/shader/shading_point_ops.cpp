@@ -234,8 +234,14 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
             const glm::vec2 b = bary_at(g, bump_at);
             a.set(5, glm::vec3(1.0f - b.x - b.y, b.x, 0.0f));
             a.set(6, g.backfacing ? 1.0f : 0.0f);
-            a.set(7, 0.5f);  // pointiness: not computed (the add-on notes it)
-            a.set(8, 0.0f);  // random per island: not computed (noted)
+            // Pointiness (per vertex) and Random Per Island (per corner, equal over a face) are mesh attributes the
+            // add-on computes as Cycles' Blender sync does; absent (id -1, or not on this mesh): 0, as Cycles reads a
+            // missing attribute.
+            for (int k = 0; k < 2; ++k) {
+                glm::vec4 v(0.0f);
+                if (a.param(1 + k) >= 0) attribute_at(g, a.param(1 + k), bump_at, v);
+                a.set(7 + k, v.x);
+            }
             return true;
         }
         case ShaderOp::object_info: {
