@@ -381,7 +381,7 @@ TEST(ShaderProgram, RepeatedRunsAtOnePointFollowTheSceneWhenItChanges) {
     // instance in between must not: the scene's revision is part of what the reuse compares.
     Scene scene;
     ProgramWriter w;
-    const auto geometry = w.op(ShaderOp::geometry, {0}, {}, {true, false, false, false, false, false, false, false, false});
+    const auto geometry = w.op(ShaderOp::geometry, {0, -1, -1}, {}, {true, false, false, false, false, false, false, false, false});
     w.output(ProgramTarget::emission, 0, geometry[0]);
     Material m = diffuse_closures("position");
     m.program = w.p;
