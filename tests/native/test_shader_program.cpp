@@ -4,6 +4,7 @@
 // (test_texture_nodes.cpp, test_converter_nodes.cpp).
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -395,4 +396,58 @@ TEST(ShaderProgram, RepeatedRunsAtOnePointFollowTheSceneWhenItChanges) {
     SurfacePoint moved = before;  // the same triangle and barycentrics, now 1 higher
     moved.position.z += 1.0f;
     expect_vec_near(emission_at(scene, moved, glm::vec3(0, 0, 1)), glm::vec3(0.1f, 0.2f, 1.0f), 1e-5f);
+}
+
+TEST(ShaderProgram, RandomProgramsAreRefusedOrRunFinitely) {
+    // Hostile programs: every op with random params, registers and tables. Each is either refused with
+    // InvalidInput or runs at a hit without crashing (the sanitizer builds run this too); whatever it sets is made
+    // finite before use.
+    std::mt19937 rng(16);
+    Scene scene;
+    const float pixels[16] = {0.1f, 0.2f, 0.3f, 1, 0.4f, 0.5f, 0.6f, 0.5f, 0.7f, 0.8f, 0.9f, 0, 1, 1, 1, 1};
+    scene.add_texture(Texture("t", pixels, 2, 2, 4, ColorSpace::srgb));
+    const uint32_t white = scene.add_material(diffuse_closures("white"));
+    scene.add_instance(add_quad(scene, white, scene.attribute_id("Col")), glm::mat4(1.0f));
+    std::uniform_int_distribution<int> pick_op(0, shader_op_count() - 1), small(-2, 24), any(0, 63);
+    std::uniform_real_distribution<float> value(-1e3f, 1e3f);
+    int refused = 0, ran = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        ProgramWriter w;
+        for (int r = 0; r < 64; ++r) w.constant(trial % 7 == 0 ? value(rng) * 1e30f : value(rng));
+        w.p.tables.resize(any(rng) * 8);
+        for (float& t : w.p.tables) t = value(rng);
+        const int count = 1 + any(rng) % 6;
+        int last = 0;
+        for (int k = 0; k < count; ++k) {
+            const ShaderOp op = static_cast<ShaderOp>(pick_op(rng));
+            const ShaderOpInfo& info = shader_op_info(op);
+            std::vector<int> params, in;
+            for (int p = 0; p < info.params; ++p) params.push_back(small(rng));
+            for (const char* c = info.inputs; *c; ++c) in.push_back(any(rng) % 60);
+            const auto out = w.op(op, params, in);
+            last = out[0];
+        }
+        w.output(ProgramTarget::closure_color, 0, last);
+        w.output(ProgramTarget::normal, 0, last);
+        w.output(ProgramTarget::emission, 0, last);
+        Material m = diffuse_closures("random");
+        m.program = w.p;
+        uint32_t material;
+        try {
+            material = scene.add_material(m);
+        } catch (const InvalidInput&) {
+            ++refused;
+            continue;
+        }
+        ++ran;
+        const Material& added = scene.materials()[material];
+        SurfacePoint s = hit_at(scene, 0.1f, 0.2f);
+        s.material = &added;
+        const Bsdf b = shade(scene, s, glm::vec3(0, 0, 1));
+        EXPECT_TRUE(std::isfinite(b.lambert.x) && std::isfinite(b.n.x)) << "trial " << trial;
+        const glm::vec3 e = emission_at(scene, s, glm::vec3(0, 0, 1));
+        EXPECT_TRUE(std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) << "trial " << trial;
+    }
+    EXPECT_GT(ran, 1000);
+    EXPECT_GT(refused, 10);
 }
