@@ -373,13 +373,15 @@ def test_normal_map_registers_its_uv_map(empty_scene, op_table):
     tree.links.new(image.outputs["Color"], normal_map.inputs["Color"])
     tree.links.new(normal_map.outputs["Normal"], shader.inputs["Normal"])
     spec = materials.convert_material(mat)
-    assert spec.attributes == ["Detail"]
-    arguments = spec.core_arguments(texture_index=lambda reference: 3, attribute_id=lambda name: 7)
+    # The UV map, and its MikkTSpace tangents (tangent space reads them, as Cycles does).
+    assert sorted(spec.attributes) == sorted(["Detail", shader_program.TANGENT_PREFIX + "Detail"])
+    ids = {"Detail": 7, shader_program.TANGENT_PREFIX + "Detail": 8}
+    arguments = spec.core_arguments(texture_index=lambda reference: 3, attribute_id=lambda name: ids[name])
     code = decode(arguments["program"], op_table)
-    assert [c[1] for c in code if c[0] == "normal_map"] == [[0, 7]]
+    assert [c[1] for c in code if c[0] == "normal_map"] == [[0, 7, 8]]
     assert [c[1][0] for c in code if c[0] == "image_texture"] == [3]
     # An unreadable image: Cycles' magenta, copied in.
-    arguments = spec.core_arguments(texture_index=lambda reference: -1, attribute_id=lambda name: 7)
+    arguments = spec.core_arguments(texture_index=lambda reference: -1, attribute_id=lambda name: ids[name])
     code = decode(arguments["program"], op_table)
     assert "image_texture" not in names(code) and "copy_vector" in names(code)
 

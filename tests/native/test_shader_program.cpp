@@ -291,7 +291,7 @@ TEST(ShaderProgram, BumpTiltsTheNormalAgainstTheHeightsGradient) {
 TEST(ShaderProgram, TangentSpaceNormalMapFollowsTheUvs) {
     Scene scene;
     ProgramWriter w;
-    const auto n = w.op(ShaderOp::normal_map, {0, -1}, {w.constant(1.0f), w.vec(glm::vec3(0.75f, 0.5f, 1.0f))});
+    const auto n = w.op(ShaderOp::normal_map, {0, -1, -1}, {w.constant(1.0f), w.vec(glm::vec3(0.75f, 0.5f, 1.0f))});
     w.output(ProgramTarget::normal, 0, n[0]);
     Material m = diffuse_closures("normal mapped");
     m.program = w.p;
@@ -299,6 +299,30 @@ TEST(ShaderProgram, TangentSpaceNormalMapFollowsTheUvs) {
     scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
     // (0.75, 0.5, 1) → (0.5, 0, 1) in (tangent = +u = +x, bitangent = +v = +y, normal).
     expect_vec_near(hit_at(scene, 0.1f, 0.1f).shading_normal, glm::normalize(glm::vec3(0.5f, 0.0f, 1.0f)), 1e-5f);
+}
+
+TEST(ShaderProgram, TangentSpaceNormalMapReadsMikkTSpaceTangentsWhereGiven) {
+    // A per-corner tangent (0, 1, 0) with bitangent sign −1, as Blender's calc_tangents gives it: the bitangent is
+    // −(n × t) = +x, so (0.75, 0.5, 1) → 0.5 t + 0 b + n = (0, 0.5, 1).
+    Scene scene;
+    const uint32_t tangent_id = scene.attribute_id("\x01tangent:");
+    ProgramWriter w;
+    const auto n = w.op(ShaderOp::normal_map, {0, -1, static_cast<int>(tangent_id)},
+                        {w.constant(1.0f), w.vec(glm::vec3(0.75f, 0.5f, 1.0f))});
+    w.output(ProgramTarget::normal, 0, n[0]);
+    Material m = diffuse_closures("mikktspace");
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    static const float v[12] = {-0.5f, -0.5f, 0, 0.5f, -0.5f, 0, 0.5f, 0.5f, 0, -0.5f, 0.5f, 0};
+    static const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    static const float tangent[16] = {0, 1, 0, -1, 0, 1, 0, -1, 0, 1, 0, -1, 0, 1, 0, -1};
+    static const int32_t t[6] = {0, 1, 2, 0, 2, 3};
+    const int32_t ids[2] = {static_cast<int32_t>(material), static_cast<int32_t>(material)};
+    MeshInput mesh = test::mesh_input("quad", v, 4, t, 2, ids);
+    mesh.uvs = uv;
+    mesh.attributes.push_back({tangent_id, tangent, 4, false});
+    scene.add_instance(scene.add_mesh_data(mesh), glm::mat4(1.0f));
+    expect_vec_near(hit_at(scene, 0.1f, 0.1f).shading_normal, glm::normalize(glm::vec3(0.0f, 0.5f, 1.0f)), 1e-5f);
 }
 
 TEST(ShaderProgram, ProgrammedEmissionIsSeenAndSampledPerTriangle) {

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import compat
-from .shader_program import POINTINESS, RANDOM_PER_ISLAND
+from .shader_program import POINTINESS, RANDOM_PER_ISLAND, TANGENT_PREFIX
 
 # Geometry we cannot render yet: skipped with a note (other non-mesh types, e.g. empties, have no surface).
 UNSUPPORTED_TYPES = {'CURVES', 'POINTCLOUD', 'VOLUME', 'GPENCIL'}
@@ -140,6 +140,8 @@ def attribute_array(mesh, name, count):
                           _edges(mesh))[:, None]
     if name == RANDOM_PER_ISLAND:
         return _random_per_island(mesh, count)
+    if name.startswith(TANGENT_PREFIX):
+        return _tangents(mesh, name[len(TANGENT_PREFIX):], count)
     if name == "":
         name = default_color_name(mesh)
         if name is None:
@@ -165,6 +167,31 @@ def attribute_array(mesh, name, count):
         mesh.loop_triangles.foreach_get("polygon_index", polygons)
         return np.repeat(values[polygons][:, None, :], 3, axis=1)
     return None                        # edge attributes: nothing a surface point reads
+
+
+def _tangents(mesh, uv_name, count):
+    """(M, 3, 4) per triangle corner: the MikkTSpace tangent of UV map `uv_name` ("" the render one) and its
+    bitangent sign, as Blender computes them for Cycles (Mesh.calc_tangents); None without that UV map or where
+    Blender cannot compute them (faces of more than four corners: the core then uses each triangle's UV tangent)."""
+    layers = mesh.uv_layers
+    if not uv_name:
+        layer = next((uv for uv in layers if uv.active_render), None) or layers.active
+        uv_name = layer.name if layer is not None else ""
+    if not uv_name or layers.get(uv_name) is None or len(mesh.loops) == 0:
+        return None
+    try:
+        mesh.calc_tangents(uvmap=uv_name)
+    except RuntimeError:
+        return None
+    per_loop = np.empty((len(mesh.loops), 4), dtype=np.float32)
+    tangents = np.empty(len(mesh.loops) * 3, dtype=np.float32)
+    signs = np.empty(len(mesh.loops), dtype=np.float32)
+    mesh.loops.foreach_get("tangent", tangents)
+    mesh.loops.foreach_get("bitangent_sign", signs)
+    mesh.free_tangents()
+    per_loop[:, :3] = tangents.reshape(-1, 3)
+    per_loop[:, 3] = signs
+    return _per_corner(mesh, per_loop, count)
 
 
 def _per_corner(mesh, per_loop, count):

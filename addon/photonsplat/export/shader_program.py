@@ -37,6 +37,9 @@ TABLE_SIZE = 256
 # export computes as Cycles' Blender sync does (export/mesh.py), under names no Blender attribute can have.
 POINTINESS = "\x01pointiness"
 RANDOM_PER_ISLAND = "\x01random_per_island"
+# A UV map's MikkTSpace tangents and bitangent signs, per corner (Normal Map in tangent space): this prefix and the
+# UV map's name ("" the render UV map).
+TANGENT_PREFIX = "\x01tangent:"
 
 # Cycles renders an Image Texture node without an image in magenta.
 MISSING_IMAGE_COLOR = (1.0, 0.0, 1.0)
@@ -738,7 +741,10 @@ _NORMAL_MAP_SPACES = {"TANGENT": 0, "OBJECT": 1, "WORLD": 2, "BLENDER_OBJECT": 3
 
 def _n_normal_map(b, node, stack):
     name = getattr(node, "uv_map", "")
-    params = [_NORMAL_MAP_SPACES.get(node.space, 0), b.attribute(name) if name else -1]
+    space = _NORMAL_MAP_SPACES.get(node.space, 0)
+    # Tangent space reads the UV map's MikkTSpace tangents, as Cycles does.
+    tangent = b.attribute(TANGENT_PREFIX + name) if space == 0 else -1
+    params = [space, b.attribute(name) if name else -1, tangent]
     return {"Normal": b.emit("normal_map", params,
                              [b.inp(node, "Strength", stack), b.inp(node, "Color", stack)])[0]}
 

@@ -60,8 +60,10 @@ namespace ps {
     X(image_texture,     5, "vf",     "vf")  /* vector, box blend; color, alpha */                                 \
     X(environment_texture, 3, "v",    "vf")  /* params: texture, interpolation, projection (0 equirect, 1 mirror */ \
                                              /* ball); vector; color, alpha */                                     \
-    X(normal_map,        2, "fv",     "v")   /* params: space (0 tangent, 1 object, 2 world, 3 blender object,   */ \
-                                             /* 4 blender world), uv attribute id; strength, color; normal */      \
+    X(normal_map,        3, "fv",     "v")   /* params: space (0 tangent, 1 object, 2 world, 3 blender object,   */ \
+                                             /* 4 blender world), uv attribute id, tangent attribute id (per    */ \
+                                             /* corner: MikkTSpace tangent xyz, bitangent sign w; -1: the       */ \
+                                             /* triangle's UV tangent); strength, color; normal */                 \
     X(bump,              2, "fffffv", "v")   /* params: invert, normal connected; strength, distance, height,    */ \
                                              /* height at dx, height at dy, normal; normal */                      \
     X(normal,            0, "vv",     "vf")  /* the node's direction, the input normal; normal, dot */             \

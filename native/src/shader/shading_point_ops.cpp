@@ -115,11 +115,34 @@ glm::vec3 tangent_space_normal(const ShaderGlobals& g, int32_t uv_id, const glm:
     return world_normal(g, n);
 }
 
-glm::vec3 normal_map(const ShaderGlobals& g, int space, int32_t uv_id, float strength, glm::vec3 color) {
+// Normal Map in tangent space as Cycles does it, from the mesh's MikkTSpace tangent and bitangent sign (a
+// per-corner attribute the add-on takes from Blender's Mesh.calc_tangents), interpolated at the hit, with the
+// interpolated (unnormalised) object-space normal; false when the mesh has no such attribute.
+bool mikktspace_normal(const ShaderGlobals& g, int32_t tangent_id, const glm::vec3& color, glm::vec3& out) {
+    glm::vec4 t;
+    if (tangent_id < 0 || !attribute_at(g, tangent_id, 0, t)) return false;
+    const glm::vec2 b = g.bary;
+    const size_t tri = g.triangle;
+    glm::vec3 normal;
+    if (!g.mesh->normals.empty()) {
+        normal = (1.0f - b.x - b.y) * g.mesh->normals[3 * tri] + b.x * g.mesh->normals[3 * tri + 1] +
+                 b.y * g.mesh->normals[3 * tri + 2];
+    } else {
+        normal = object_normal(g, g.backfacing ? -g.Ng : g.Ng);  // the front face's geometric normal
+    }
+    const glm::vec3 tangent(t);
+    const glm::vec3 bitangent = t.w * glm::cross(normal, tangent);
+    const glm::vec3 n = safe_normalize(color.x * tangent + color.y * bitangent + color.z * normal);
+    out = world_normal(g, n);
+    return true;
+}
+
+glm::vec3 normal_map(const ShaderGlobals& g, int space, int32_t uv_id, int32_t tangent_id, float strength,
+                     glm::vec3 color) {
     color = 2.0f * (color - 0.5f);
     glm::vec3 n;
     if (space == 0) {
-        n = tangent_space_normal(g, uv_id, color);
+        if (!mikktspace_normal(g, tangent_id, color, n)) n = tangent_space_normal(g, uv_id, color);
         if (g.backfacing) n = -n;
     } else {
         if (space == 3 || space == 4) {  // Blender's own object / world convention
@@ -294,7 +317,9 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
             a.set(1, 1.0f - facing);
             return true;
         }
-        case ShaderOp::normal_map: a.set(0, normal_map(g, a.param(0), a.param(1), a.f(0), a.v(1))); return true;
+        case ShaderOp::normal_map:
+            a.set(0, normal_map(g, a.param(0), a.param(1), a.param(2), a.f(0), a.v(1)));
+            return true;
         case ShaderOp::bump: {
             const glm::vec3 n_in = a.param(1) ? input_normal(g, a.v(5)) : g.N;
             a.set(0, bump(g, a.param(0) != 0, n_in, a.f(0), a.f(1), a.f(2), a.f(3), a.f(4)));
