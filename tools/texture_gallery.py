@@ -53,6 +53,9 @@ DIAGNOSED = {}
 def parse_args(argv):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", action="append", default=[], help="a material name; repeatable")
+    parser.add_argument("--blend", default=str(GALLERY_BLEND),
+                        help="another gallery: a copy of texture_gallery.blend whose scene property 'gallery' "
+                             "names other materials (e.g. an artist's, appended into it)")
     parser.add_argument("--quick", action="store_true", help="a smoke run: few samples and iterations")
     parser.add_argument("--cycles-only", action="store_true", help="render and cache Cycles only (no build needed)")
     parser.add_argument("--build", default="build", help="the build folder whose blender/ add-on renders")
@@ -94,7 +97,7 @@ def run_in_blender(argv):
             sys.exit(f"no add-on at {addon}: build the project first (or pass --build, or --cycles-only)")
         env["BLENDER_USER_SCRIPTS"] = str(build / "blender")
         command += ["--addons", "photonsplat"]
-    command += [str(GALLERY_BLEND), "--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--",
+    command += [str(args.blend), "--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--",
                 *argv]
     started = time.time()
     code = subprocess.call(command, env=env)
