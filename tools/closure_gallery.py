@@ -152,6 +152,29 @@ def display(image):
 
 # ---- inside Blender -------------------------------------------------------------------------------------------
 
+def render_exr(scene, path):
+    """Renders `scene` with bpy.ops into the OpenEXR `path` (deleted after): float32 (h, w, 4), row 0 at the top,
+    as the core's images. Shared by the galleries and tools/node_compare.py."""
+    import bpy
+    import numpy as np
+    scene.render.filepath = str(path)
+    scene.render.use_file_extension = False
+    settings = scene.render.image_settings
+    settings.file_format = 'OPEN_EXR'
+    settings.color_mode = 'RGBA'
+    settings.color_depth = '32'
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(str(path), check_existing=False)
+    try:
+        width, height = image.size
+        pixels = np.empty(width * height * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        return np.flipud(pixels.reshape(height, width, 4)).copy()
+    finally:
+        bpy.data.images.remove(image)
+        os.remove(path)
+
+
 def blender_main(argv):
     import bpy
     import numpy as np
@@ -189,24 +212,6 @@ def blender_main(argv):
         scene.render.film_transparent = False
         return {k: getattr(c, k) for k in ("samples", "light_sampling_threshold", "filter_width", "max_bounces",
                                            "caustics_reflective", "caustics_refractive", "blur_glossy")}
-
-    def render_cycles_once(scene, path):
-        scene.render.filepath = str(path)
-        scene.render.use_file_extension = False
-        settings = scene.render.image_settings
-        settings.file_format = 'OPEN_EXR'
-        settings.color_mode = 'RGBA'
-        settings.color_depth = '32'
-        bpy.ops.render.render(write_still=True)
-        image = bpy.data.images.load(str(path), check_existing=False)
-        try:
-            width, height = image.size
-            pixels = np.empty(width * height * 4, dtype=np.float32)
-            image.pixels.foreach_get(pixels)
-            return np.flipud(pixels.reshape(height, width, 4)).copy()     # top-down, as the core's images
-        finally:
-            bpy.data.images.remove(image)
-            os.remove(path)
 
     def describe_scene(scene):
         """What the Cycles image depends on, as JSON-able data (materials by name only: described apart)."""
@@ -295,7 +300,7 @@ def blender_main(argv):
             while True:
                 for _ in range(SEEDS):
                     cycles_settings(scene, per_seed, len(images) + 1)
-                    images.append(render_cycles_once(scene, OUT_DIR / "cycles_tmp.exr"))
+                    images.append(render_exr(scene, OUT_DIR / "cycles_tmp.exr"))
                 noise = relative_noise(images, mask)
                 if noise <= args.cycles_noise or (len(images) + SEEDS) * per_seed > policy["max_samples"]:
                     break

@@ -244,24 +244,9 @@ def cycles_plane_settings(scene, threads=2):
 def render_cycles(path):
     """Render the current scene with bpy.ops into the OpenEXR `path`; float32 (h, w, 4), row 0 at the top."""
     import bpy
-    import numpy as np
-    scene = bpy.context.scene
-    scene.render.filepath = str(path)
-    scene.render.use_file_extension = False
-    s = scene.render.image_settings
-    s.file_format = 'OPEN_EXR'
-    s.color_mode = 'RGBA'
-    s.color_depth = '32'
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(str(path), check_existing=False)
-    try:
-        width, height = image.size
-        pixels = np.empty(width * height * 4, dtype=np.float32)
-        image.pixels.foreach_get(pixels)
-        return np.flipud(pixels.reshape(height, width, 4)).copy()
-    finally:
-        bpy.data.images.remove(image)
-        os.remove(path)
+    sys.path.insert(0, str(REPO / "tools"))
+    from closure_gallery import render_exr
+    return render_exr(bpy.context.scene, path)
 
 
 def cycles_case(name, cache_dir, threads=2):

@@ -35,7 +35,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
-from closure_gallery import commit_of_repo, display, write_png  # noqa: E402
+from closure_gallery import commit_of_repo, display, render_exr, write_png  # noqa: E402
 
 OUT_DIR = REPO / "build" / "texture_gallery"
 RESULTS_MD = REPO / "docs" / "results" / "texture_gallery.md"
@@ -150,24 +150,6 @@ def blender_main(argv):
         return {k: getattr(c, k) for k in ("samples", "light_sampling_threshold", "filter_width", "max_bounces",
                                            "caustics_reflective", "caustics_refractive", "blur_glossy")}
 
-    def render_cycles_once(scene, path):
-        scene.render.filepath = str(path)
-        scene.render.use_file_extension = False
-        s = scene.render.image_settings
-        s.file_format = 'OPEN_EXR'
-        s.color_mode = 'RGBA'
-        s.color_depth = '32'
-        bpy.ops.render.render(write_still=True)
-        image = bpy.data.images.load(str(path), check_existing=False)
-        try:
-            width, height = image.size
-            pixels = np.empty(width * height * 4, dtype=np.float32)
-            image.pixels.foreach_get(pixels)
-            return np.flipud(pixels.reshape(height, width, 4)).copy()
-        finally:
-            bpy.data.images.remove(image)
-            os.remove(path)
-
     def describe_scene(scene):
         bpy.context.view_layer.update()
         desc = {"blender": bpy.app.version_string,
@@ -231,7 +213,7 @@ def blender_main(argv):
             while True:
                 for _ in range(SEEDS):
                     cycles_settings(scene, per_seed, len(images) + 1)
-                    images.append(render_cycles_once(scene, OUT_DIR / f"cycles_tmp_{os.getpid()}.exr"))
+                    images.append(render_exr(scene, OUT_DIR / f"cycles_tmp_{os.getpid()}.exr"))
                 noise = relative_noise(images, mask)
                 if noise <= args.cycles_noise or (len(images) + SEEDS) * per_seed > policy["max_samples"]:
                     break
