@@ -112,21 +112,30 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
 
 }  // namespace
 
-glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+namespace {
+
+// Σ of the closures' weights, textured: a lambert_only material's albedo.
+glm::vec3 albedo_of(const Scene& scene, const SurfacePoint& surface, const Closure* closures, size_t count) {
     glm::vec3 albedo(0.0f);
-    if (surface.material->programmed) {
-        ProgrammedMaterial pm;
-        run_material_program(scene, surface, wo, pm);
-        for (int i = 0; i < pm.closure_count; ++i) albedo += pm.closures[i].color;
-        return albedo;
-    }
-    for (const Closure& c : surface.material->closures) {
+    for (size_t i = 0; i < count; ++i) {
+        const Closure& c = closures[i];
         glm::vec3 weight = c.color;
         if (c.texture >= 0 && c.texture_target == TextureTarget::color)
             weight *= scene.textures()[static_cast<size_t>(c.texture)].lookup(surface.uv);
         albedo += weight;
     }
     return albedo;
+}
+
+}  // namespace
+
+glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+    const Material& m = *surface.material;
+    if (!m.programmed) return albedo_of(scene, surface, m.closures.data(), m.closures.size());
+    // The program's values in place of the constants; a closure's texture still multiplies, as in shade().
+    ProgrammedMaterial programmed;
+    run_material_program(scene, surface, wo, programmed);
+    return albedo_of(scene, surface, programmed.closures, static_cast<size_t>(programmed.closure_count));
 }
 
 namespace {

@@ -475,3 +475,25 @@ TEST(ShaderProgram, RandomProgramsAreRefusedOrRunFinitely) {
     EXPECT_GT(ran, 1000);
     EXPECT_GT(refused, 10);
 }
+
+TEST(ShaderProgram, LambertPathKeepsAClosureTextureBesideAProgram) {
+    // A Diffuse closure coloured by an image straight in (the closure's texture) whose material also has a
+    // program (a Bump normal): the stages' Lambert path must see the textured colour, as shade() does.
+    Scene scene;
+    const float red[3] = {1.0f, 0.0f, 0.0f};
+    const int32_t texture = static_cast<int32_t>(scene.add_texture(Texture("red", red, 1, 1, 3, ColorSpace::linear)));
+    ProgramWriter w;
+    const auto n = w.op(ShaderOp::bump, {0, 0}, {w.constant(1.0f), w.constant(0.1f), w.constant(0.0f),
+                                                 w.constant(0.0f), w.constant(0.0f), w.vec(glm::vec3(0.0f))});
+    w.output(ProgramTarget::normal, 0, n[0]);
+    Material m = diffuse_closures("textured and bumped");
+    m.closures[0].texture = texture;
+    m.program = w.p;
+    const uint32_t material = scene.add_material(m);
+    ASSERT_TRUE(scene.materials()[material].programmed);
+    ASSERT_TRUE(scene.materials()[material].lambert_only);
+    scene.add_instance(add_quad(scene, material, scene.attribute_id("Col")), glm::mat4(1.0f));
+    const SurfacePoint s = hit_at(scene, 0.1f, 0.2f);
+    expect_vec_near(lambert_albedo(scene, s, glm::vec3(0, 0, 1)), glm::vec3(0.8f, 0.0f, 0.0f), 1e-6f);
+    expect_vec_near(shade(scene, s, glm::vec3(0, 0, 1)).lambert, glm::vec3(0.8f, 0.0f, 0.0f), 1e-6f);
+}
