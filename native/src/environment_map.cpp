@@ -91,7 +91,8 @@ EnvironmentDistribution::EnvironmentDistribution(int width, int height, std::vec
         double sum = 0.0;
         for (int x = 0; x < width; ++x) {
             const float* t = row + 3 * static_cast<size_t>(x);
-            const double luminance = environment_luminance(glm::vec3(t[0], t[1], t[2]));
+            // environment_luminance's weights, in double: a map's integral to double precision.
+            const double luminance = 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
             sum += std::max(luminance, 0.0);
             running[static_cast<size_t>(x)] = sum;
         }
@@ -169,20 +170,28 @@ EnvironmentSample EnvironmentDistribution::sample(float u1, float u2) const {
     const int x = static_cast<int>(column_end - cdf) - 1;
     const double du = (static_cast<double>(u1) - cdf[x]) / (static_cast<double>(cdf[x + 1]) - cdf[x]);
 
-    const double u = (x + std::min(du, 1.0)) / width_;
-    const double v = (y + std::min(dv, 1.0)) / height_;
-    const double phi = kPi - 2.0 * kPi * u;
-    const double sin_theta = std::sin(kPi * v);  // θ = π (1 − v)
-    const double cos_theta = -std::cos(kPi * v);
-    s.direction = glm::vec3(static_cast<float>(sin_theta * std::cos(phi)), static_cast<float>(sin_theta * std::sin(phi)),
-                            static_cast<float>(cos_theta));
-    // pdf and radiance of the cell the (rounded) direction lies in: identical to pdf() and radiance() of it.
+    // The direction of (u, v), rounded to float, and the cell it lies in. Where rounding carries it across the
+    // cell's edge (a draw right on the edge, or on a pole, where every column meets: about one draw in a
+    // million), it is drawn again a thousandth of the cell inside the edge, so that every sample lies in the
+    // cell it was drawn from and has that cell's (positive) probability.
+    auto place = [&](double fu, double fv, int& cx, int& cy, double& cell_sin_theta) {
+        const double u = (x + fu) / width_, v = (y + fv) / height_;
+        const double phi = kPi - 2.0 * kPi * u;
+        const double sin_theta = std::sin(kPi * v);  // θ = π (1 − v)
+        const double cos_theta = -std::cos(kPi * v);
+        s.direction = glm::vec3(static_cast<float>(sin_theta * std::cos(phi)),
+                                static_cast<float>(sin_theta * std::sin(phi)), static_cast<float>(cos_theta));
+        return locate(s.direction, cx, cy, cell_sin_theta) && cx == x && cy == y && cell_sin_theta > 0.0;
+    };
     int cx = x, cy = y;
     double cell_sin_theta = 0.0;
-    if (locate(s.direction, cx, cy, cell_sin_theta)) {
-        s.pdf = cell_pdf(cx, cy, cell_sin_theta);
-        s.radiance = texel(cx, cy);
+    if (!place(du, dv, cx, cy, cell_sin_theta)) {
+        constexpr double inside = 1e-3;
+        place(std::clamp(du, inside, 1.0 - inside), std::clamp(dv, inside, 1.0 - inside), cx, cy, cell_sin_theta);
     }
+    // pdf and radiance of the cell the direction lies in: identical to pdf() and radiance() of it.
+    s.pdf = cell_pdf(cx, cy, cell_sin_theta);
+    s.radiance = texel(cx, cy);
     return s;
 }
 

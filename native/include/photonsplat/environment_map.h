@@ -43,7 +43,7 @@ inline float environment_luminance(const glm::vec3& rgb) {
 
 struct EnvironmentSample {
     glm::vec3 direction{0.0f, 0.0f, 1.0f};  // unit, world space (+Z up), the direction light comes FROM
-    float pdf = 0.0f;                       // per unit solid angle; 0: no sample (a zero map), skip it
+    float pdf = 0.0f;                       // per unit solid angle; 0 only for a zero map: skip it
     glm::vec3 radiance{0.0f};               // of the map's cell the direction lies in (nearest, as radiance())
 };
 
@@ -77,8 +77,10 @@ public:
 
     // u1 picks the column within the row, u2 the row (Cycles' randu, randv); both in [0, 1), values outside
     // are clamped. The returned pdf and radiance are pdf(direction) and radiance(direction) of the returned
-    // direction, bit for bit, so MIS weights agree whichever technique found a direction. A zero map
-    // returns pdf 0 (direction +Z, radiance 0).
+    // direction, bit for bit, so MIS weights agree whichever technique found a direction; the pdf is > 0 for
+    // every sample of a non-zero map (a draw whose float direction would round across its cell's edge or onto
+    // a pole, about one in a million, is moved a thousandth of the cell inside). A zero map returns pdf 0
+    // (direction +Z, radiance 0): skip the sample.
     EnvironmentSample sample(float u1, float u2) const;
 
     // Solid-angle density with which sample() draws `direction` (any non-zero length); 0 where the map weighs
