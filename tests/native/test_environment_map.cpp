@@ -406,6 +406,22 @@ TEST(EnvironmentMap, ZeroMapsSampleNothing) {
     }
 }
 
+TEST(EnvironmentMap, NegativeTexelsWeighNothing) {
+    // A texel of negative luminance (an HDRI's ringing) is never drawn and leaves the others' weights alone.
+    const int w = 4, h = 2;
+    const glm::vec3 negative(-5.0f, -5.0f, -5.0f);
+    const EnvironmentDistribution env(w, h, make_map(w, h, [&](int x, int y) {
+        return x == 1 && y == 1 ? negative : glm::vec3(1.0f);
+    }));
+    const glm::vec3 inside = direction_of(1.5 / w, 1.5 / h);
+    EXPECT_EQ(env.pdf(inside), 0.0f);
+    EXPECT_EQ(env.radiance(inside), negative);  // the map as given
+    EXPECT_NEAR(env.integral(), 4.0 * kPi - cell_solid_angle(1, w, h), 1e-13);
+    EXPECT_NEAR(pdf_over_cell(env, 0, 1), 1.0 / 7.0, 1e-6);  // 7 equal cells (both rows have sin θ_centre = sin 45°)
+    Rng rng(31, RngDomain::direct_light, 0);
+    for (int i = 0; i < 10000; ++i) ASSERT_NE(env.sample(rng.uniform(), rng.uniform()).radiance, negative);
+}
+
 TEST(EnvironmentMap, OneTexelIsAConstantSky) {
     const EnvironmentDistribution env(1, 1, std::vector<float>{1.0f, 1.0f, 1.0f});
     // One cell: v uniform over [0, 1], so the density is 1 / (2π² sin θ).
