@@ -47,6 +47,7 @@ struct EnvironmentSample {
     glm::vec3 radiance{0.0f};               // of the map's cell the direction lies in (nearest, as radiance())
 };
 
+// Immutable once built: sample(), pdf() and radiance() may be called from any number of threads at once.
 class EnvironmentDistribution {
 public:
     // `rgb`: width × height × 3 linear radiances in the order above (row 0 at the bottom). Width and height
