@@ -12,6 +12,9 @@ Blender, which compat.py holds (light_color_power, point_intensity, area_radianc
   area   one-sided rectangle emitting radiance along local -Z: L = c P / (4 A) in 3.4 (flux pi/4 P),
          L = c P / (pi A) in 4.x (flux P), where A is the area including the object's scale.
          Disk and ellipse lights are native ellipses: A = π/4 size_x size_y (scale included), as in Cycles.
+  portal an area light with Cycles' Portal on (light.cycles.is_portal) emits nothing: it guides the world's
+         sampling through its rectangle (Scene.add_portal: corner and edges, light passing along
+         cross(edge_u, edge_v) = the light's local -Z); a disk or ellipse portal is its bounding rectangle.
 """
 
 import math
@@ -25,6 +28,8 @@ from . import materials
 def export_light(core_scene, name, light, matrix, notes):
     """Add `light` (bpy.types.Light, evaluated) placed by `matrix` (world matrix, a copy) to `core_scene`.
     Returns False when the light was skipped."""
+    if is_portal(light):
+        return _export_portal(core_scene, name, light, matrix, notes)
     tint = _node_tint(light, notes)
     rgb = tuple(c * t for c, t in zip(compat.light_color_power(light), tint))
 
@@ -81,6 +86,34 @@ def _export_area_light(core_scene, name, light, matrix, rgb, notes):
     return True
 
 
+def is_portal(light):
+    """Whether `light` is a Cycles portal (an area light that emits nothing; read defensively: the property is
+    Cycles' own, absent when the Cycles add-on is not loaded)."""
+    settings = getattr(light, "cycles", None)
+    return light.type == 'AREA' and bool(getattr(settings, "is_portal", False))
+
+
+def _export_portal(core_scene, name, light, matrix, notes):
+    size_x = float(light.size)
+    size_y = float(light.size_y) if light.shape in ('RECTANGLE', 'ELLIPSE') else size_x
+    basis = matrix.to_3x3()
+    # Light passes along cross(edge_u, edge_v): X x -Y = -Z, the area light's own emission direction.
+    edge_u = basis.col[0] * size_x
+    edge_v = basis.col[1] * -size_y
+    if edge_u.cross(edge_v).length <= 0.0:
+        notes.append(f"Light '{name}': portal of zero size skipped")
+        return False
+    facing = -basis.col[2]
+    if edge_u.cross(edge_v).dot(facing) < 0.0:      # a mirrored object (negative scale): keep -Z
+        edge_u, edge_v = -edge_v, -edge_u
+    if light.shape in ('DISK', 'ELLIPSE'):
+        notes.append(f"Light '{name}': {light.shape.lower()} portal rendered as its bounding rectangle")
+    center = matrix.translation
+    corner = center - edge_u * 0.5 - edge_v * 0.5
+    core_scene.add_portal(name, tuple(corner), tuple(edge_u), tuple(edge_v))
+    return True
+
+
 def _non_uniform(matrix):
     scale = matrix.to_scale()
     return max(abs(scale.x), abs(scale.y)) > 1.0001 * min(abs(scale.x), abs(scale.y))
@@ -118,4 +151,4 @@ class _NoScene:
     """Takes the add_*_light calls of export_light and keeps nothing."""
 
     def __getattr__(self, method):
-        return lambda **kwargs: None
+        return lambda *args, **kwargs: None

@@ -9,8 +9,10 @@ reading geometry and building BVHs, so:
     depsgraph says their object's geometry changed (or they are new);
   - a change of transforms only (moved objects, moved instancers) calls Scene.set_instance_transform on the
     existing core scene: the next render refits the top-level BVH, every mesh BVH is kept;
-  - changed lights are replaced with Scene.clear_lights + add_*_light, a changed world with set_background:
-    no mesh, instance or BVH touched;
+  - changed lights (and portals) are replaced with Scene.clear_lights + add_*_light / add_portal, a changed
+    world (its constant, its node program, an image or a rotation in it) with set_background and
+    set_world_program: no mesh, instance or BVH touched; the world's images go into the scene's one texture
+    table, the materials' (an image both use is added once);
   - anything else (an object added, removed, re-meshed or given another material, an edited material or
     texture) builds a new core Scene from the kept arrays: only edited meshes are read from Blender, but
     the core then rebuilds every BVH (it cannot remove instances or replace a mesh's data in place).
@@ -32,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import settings as settings_table
-from . import camera, lights, mesh, world
+from . import camera, lights, mesh, textures, world
 from .instancing import GeometryTable, MaterialTable, instance_name, mesh_needs, placement, unique
 
 # Notes beyond this many are summarised in one line: a scene with 500 odd materials should not bury the report.
@@ -69,7 +71,7 @@ class SyncReport:
     meshes: int = 0             # meshes read from Blender
     lights: int = 0             # lights exported (0: the lights did not change)
     moved: int = 0              # set_instance_transform calls
-    world: bool = False         # background changed
+    world: bool = False         # the world (background constant or program) changed
     rebuilt: bool = False       # a new core Scene was built
     reason: str = ""            # why it was rebuilt
 
@@ -125,7 +127,8 @@ class BlenderSync:
         self._light_calls = None     # add_*_light calls in self.scene
         self._light_notes = []
         self._object_notes = []
-        self._background = None
+        self._world = None           # world.WorldSpec in self.scene
+        self._world_signature = None
         self._world_notes = []
         self._materials_dirty = False
         self._specs = {}             # material name -> MaterialSpec, converted again when materials change
@@ -183,8 +186,10 @@ class BlenderSync:
                 object_notes.append(f"Object '{instance_name(instance)}': {ob.type.lower()} objects are not "
                                     "supported yet, skipped")
         self._object_notes = object_notes
-        world_notes = []
-        background = tuple(world.background_radiance(depsgraph.scene_eval.world, world_notes))
+        # What the core takes (a core older than world programs and portals gets the constant world, no portals).
+        target = build.scene if build is not None else self.scene
+        spec = world.convert_world(depsgraph.scene_eval.world, programs=hasattr(target, "set_world_program"))
+        light_notes += self._portal_notes(recorder, hasattr(target, "add_portal"))
         used = {where.mesh_key for where in placements}
         for stale in set(self._arrays) - used:
             del self._arrays[stale]
@@ -195,9 +200,10 @@ class BlenderSync:
             self._light_calls, self._light_notes = recorder.calls, light_notes
             self.light_exports += 1
             report.lights = max(1, len(recorder.calls))
-        world_changed = background != self._background
+        signature = spec.signature
+        world_changed = signature != self._world_signature
         if world_changed:
-            self._background, self._world_notes = background, world_notes
+            self._world, self._world_signature, self._world_notes = spec, signature, spec.report_lines()
             report.world = True
 
         reason = "first export" if build is not None else self._rebuild_reason(layout, report)
@@ -227,7 +233,7 @@ class BlenderSync:
                 scene.clear_lights()
                 self._add_lights(scene)
             if world_changed:
-                scene.set_background(radiance=self._background)
+                self._apply_world(scene, self._build)
         self._layout = layout
         self.notes = self._current_notes()
         return report
@@ -238,6 +244,10 @@ class BlenderSync:
         import bpy
 
         dirty_objects, dirty_data = set(), set()
+        scene_world = depsgraph.scene.world
+        world_trees = set()
+        if scene_world is not None and getattr(scene_world, "node_tree", None) is not None:
+            world_trees.add(_original_pointer(scene_world.node_tree))
         for update in depsgraph.updates:
             item = update.id
             if isinstance(item, bpy.types.Object):
@@ -245,6 +255,8 @@ class BlenderSync:
                     dirty_objects.add(item.name_full)
             elif isinstance(item, bpy.types.Mesh):
                 dirty_data.add(item.name_full)
+            elif isinstance(item, bpy.types.ShaderNodeTree) and _original_pointer(item) in world_trees:
+                pass        # the world's own node tree: the world is compared whole every sync
             elif isinstance(item, (bpy.types.Material, bpy.types.ShaderNodeTree, bpy.types.Image)):
                 # A node tree edit may reach us as the tree only (its material not listed): all materials are
                 # converted again, which the core can only do in a new scene.
@@ -280,7 +292,7 @@ class BlenderSync:
     def _finish(self, build):
         """Completes `build` with the lights and the world and makes it the current scene."""
         self._add_lights(build.scene)
-        build.scene.set_background(radiance=self._background)
+        self._apply_world(build.scene, build)
         self.scene, self._build = build.scene, build
         self._materials_dirty = False
         self.builds += 1
@@ -289,9 +301,44 @@ class BlenderSync:
         for method, args, kwargs in self._light_calls:
             getattr(scene, method)(*args, **kwargs)
 
+    @staticmethod
+    def _portal_notes(recorder, supported):
+        """Drops the portals of `recorder` when the core has no add_portal (not `supported`); the notes."""
+        if supported:
+            return []
+        portals = [args[0] if args else kwargs.get("name") for method, args, kwargs in recorder.calls
+                   if method == "add_portal"]
+        recorder.calls = [call for call in recorder.calls if call[0] != "add_portal"]
+        return [f"Light '{name}': portals not supported by this core, skipped" for name in portals]
+
+    def _apply_world(self, scene, build):
+        """The world of self._world into `scene` (its images through the texture table of `build`)."""
+        spec = self._world
+        scene.set_background(radiance=tuple(spec.radiance))
+        if not hasattr(scene, "set_world_program"):
+            return
+        if spec.uses_program:
+            program = spec.core_program(lambda reference: self._world_texture(build, reference))
+            scene.set_world_program(program, map_resolution=int(spec.map_resolution))
+        else:
+            scene.set_world_program(None)
+
+    def _world_texture(self, build, reference):
+        """Core index of the world's image of `reference`, in the scene's one texture table (the materials'): an
+        image the materials use too is not added again. An unreadable image is a note and renders magenta."""
+        table = build.materials._textures
+        if reference.key not in table:
+            try:
+                table[reference.key] = textures.add_texture(build.scene, reference)
+            except (ValueError, RuntimeError) as error:
+                self._world_notes.append(f"World '{self._world.name}': image '{reference.image.name}' not "
+                                         f"readable ({error}); rendered magenta")
+                table[reference.key] = -1
+        return table[reference.key]
+
     def _current_notes(self):
         notes = self._build.material_notes + self._light_notes + self._object_notes + self._world_notes
-        if not self._light_calls and not self._build.materials.emissive and max(self._background) <= 0.0:
+        if not self.lights and not self._build.materials.emissive and not self._world.emits:
             notes.append("The scene has no lights, no emissive surfaces and a black world: the image will be black")
         return unique(notes)
 
@@ -313,7 +360,12 @@ class BlenderSync:
 
     @property
     def lights(self):
-        return len(self._light_calls or ())
+        """Lights exported (portals, which emit nothing, not counted)."""
+        return sum(1 for method, _, _ in self._light_calls or () if method != "add_portal")
+
+    @property
+    def portals(self):
+        return sum(1 for method, _, _ in self._light_calls or () if method == "add_portal")
 
     @property
     def materials(self):
@@ -324,6 +376,12 @@ class BlenderSync:
         """Original object name -> core instance ids showing it (its own mesh and every instance it generates or
         that shows it)."""
         return {} if self._build is None else self._build.geometry.instances_by_object
+
+
+def _original_pointer(id_block):
+    """as_pointer() of the original of an (evaluated) ID block."""
+    original = getattr(id_block, "original", None) or id_block
+    return original.as_pointer()
 
 
 @dataclass
