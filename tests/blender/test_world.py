@@ -216,6 +216,20 @@ def test_light_path_camera_ray_mix(empty_scene):
     assert spec.notes == []
 
 
+def test_sky_texture_compiles_through_the_node_table(empty_scene):
+    """Sky Texture goes through whatever shader_program.NODES has for it: its op when it has one, else a note."""
+    world, nodes, links, output = node_world(empty_scene)
+    sky = nodes.new("ShaderNodeTexSky")
+    background = nodes.new("ShaderNodeBackground")
+    links.new(sky.outputs["Color"], background.inputs["Color"])
+    links.new(background.outputs[0], output.inputs["Surface"])
+    spec = world_export.convert_world(world)
+    if "ShaderNodeTexSky" in shader_program.NODES:
+        assert spec.uses_program and "sky_texture" in op_names(spec), spec.notes
+    else:
+        assert any("Sky Texture" in note for note in spec.notes)
+
+
 def test_world_invisible_to_the_camera_compiles_the_camera_flag(empty_scene):
     world = uniform_world(empty_scene, (1.0, 0.5, 0.25), 1.0)
     world.cycles_visibility.camera = False
