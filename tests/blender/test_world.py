@@ -447,7 +447,8 @@ def test_escaped_camera_rays_see_cycles_sky(empty_scene, core, tmp_path):
     sys.path.insert(0, str(REPO / "tools"))
     import node_compare
 
-    world, mapping, environment = hdri_world(empty_scene, rotation_z=math.radians(40.0), strength=1.5)
+    world, mapping, environment = hdri_world(empty_scene, rotation_z=math.radians(40.0), strength=1.5,
+                                             image=equirect_image("Fine", 32, 16))
     environment.interpolation = 'Closest'         # texel values, not their blends: a sharp comparison
     sky_scene(empty_scene)
     empty_scene.render.resolution_x = empty_scene.render.resolution_y = 32
@@ -464,3 +465,45 @@ def test_escaped_camera_rays_see_cycles_sky(empty_scene, core, tmp_path):
           f"{close.mean() * 100:.1f} % of pixels within 1e-3")
     assert close.mean() >= 0.97
     assert abs(ours[..., :3].mean() / cycles[..., :3].mean() - 1.0) < 0.01
+
+
+def test_camera_sees_one_background_while_another_lights_the_scene(empty_scene, core, tmp_path):
+    """A Light Path Is Camera Ray mix: the camera sees blue, the grey plane is lit by white (against Cycles)."""
+    if not hasattr(core.Scene, "set_world_program"):
+        pytest.skip("this core has no world programs (Scene.set_world_program)")
+    sys.path.insert(0, str(REPO / "tools"))
+    import node_compare
+
+    world, nodes, links, output = node_world(empty_scene)
+    light_path = nodes.new("ShaderNodeLightPath")
+    lighting = nodes.new("ShaderNodeBackground")
+    lighting.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    seen = nodes.new("ShaderNodeBackground")
+    seen.inputs["Color"].default_value = (0.1, 0.2, 0.9, 1.0)
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(light_path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    links.new(lighting.outputs[0], mix.inputs[1])
+    links.new(seen.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], output.inputs["Surface"])
+    bpy.ops.mesh.primitive_plane_add(size=2.0)               # no material: grey 0.8 diffuse in both renderers
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.data.type = 'ORTHO'
+    cam.data.ortho_scale = 4.0
+    cam.location = (0.0, 0.0, 5.0)                           # looking down: the plane in the middle, sky around
+    empty_scene.collection.objects.link(cam)
+    empty_scene.camera = cam
+    empty_scene.render.resolution_x = empty_scene.render.resolution_y = 32
+    empty_scene.render.resolution_percentage = 100
+    node_compare.cycles_plane_settings(empty_scene, threads=2)
+    empty_scene.cycles.samples = 64
+    cycles = node_compare.render_cycles(tmp_path / "cycles.exr")[..., :3]
+    ours, notes, _ = node_compare.photonsplat_case(core, threads=2)
+    ours = ours[..., :3]
+    assert not [n for n in notes if n.startswith("World")], notes
+    sky = cycles[..., 2] > 3.0 * cycles[..., 0]
+    plane = ~sky
+    assert 0.2 < plane.mean() < 0.3, plane.mean()            # the plane covers a quarter of the view
+    print(f"\nplane: Cycles {cycles[plane].mean():.4f}, ours {ours[plane].mean():.4f}; sky ours "
+          f"{ours[sky].mean(axis=0)}")
+    np.testing.assert_allclose(ours[sky], np.broadcast_to((0.1, 0.2, 0.9), ours[sky].shape), rtol=1e-4)
+    assert abs(ours[plane].mean() / cycles[plane].mean() - 1.0) < 0.02
