@@ -14,6 +14,7 @@ void bind_reference(pybind11::module_& m);    // reference.cpp: render_reference
 void bind_translation(pybind11::module_& m);  // translation.cpp: meshes + instances, textures, spot lights
 void bind_progressive(pybind11::module_& m);  // progressive.cpp: Progressive (stepping, for the viewport)
 void bind_scene_updates(pybind11::module_& m);
+void bind_world(pybind11::module_& m);        // world.cpp: Scene.set_world_program, add_portal, world_radiance
 void bind_programs(pybind11::module_& m);     // programs.cpp: shader_ops, Scene.attribute_id / set_instance_info  // scene_updates.cpp: Scene.clear_lights (viewport updates)
 
 }  // namespace ps_py

@@ -313,4 +313,5 @@ PYBIND11_MODULE(_core, m) {
     bind_progressive(m);
     bind_scene_updates(m);
     bind_programs(m);
+    bind_world(m);
 }

@@ -116,6 +116,9 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     const glm::vec3 origin = offset_ray_origin(x, side, rounding_scale);
     glm::vec3 sum(0.0f);
     bool any_area = false;
+    const bool world_constant = sources.world().constant();
+    bool world_sampled = false;  // a programmed world among the sources: its BSDF directions always run
+    for (size_t l = 0; l < sources.size(); ++l) world_sampled = world_sampled || (sources.is_world(l) && !world_constant);
     for (size_t l = 0; l < sources.size(); ++l) {
         const bool delta = sources.is_delta(l);
         any_area = any_area || !delta;
@@ -131,22 +134,24 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             const float cos_shading = std::fabs(glm::dot(in.wi, b.n));
             // The shading normal only weights the light; on the reflection side it must agree with the geometric.
             if (!transmission && !(glm::dot(in.wi, b.n) > 0.0f)) continue;
-            // The uniform world is sampled cosine-weighted, which is the Lambert part's own sampling: light
-            // samples take that part (weight 1), the BSDF's directions below take the lobes (weight 1).
-            const bool world = sources.is_world(l);
-            const glm::vec3 f = (mis && !world) ? bsdf_eval(b, in.wi, set)
-                                                : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
+            // The constant world is sampled cosine-weighted, which is the Lambert part's own sampling: light
+            // samples take that part (weight 1), the BSDF's directions below take the lobes (weight 1). A
+            // programmed world is sampled by its map: the whole BSDF, weighted against the BSDF's directions.
+            const bool world = sources.is_world(l) && world_constant;
+            const bool weighted = (mis || sources.is_world(l)) && !world;
+            const glm::vec3 f = weighted ? bsdf_eval(b, in.wi, set)
+                                         : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
             if (is_black(f)) continue;
             ++rays;
             // Stop just short of the light's own point so the light's surroundings still shadow it.
             const glm::vec3 t = shadow_transmittance(scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), transparency);
             if (is_black(t)) continue;
-            const float w = (delta || !mis || world) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set));
+            const float w = (delta || !weighted) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set));
             light_sum += f * in.value * t * (cos_shading * w);
         }
         sum += light_sum / static_cast<float>(n);
     }
-    if (!mis || !any_area) return sum;
+    if (!((mis && any_area) || world_sampled)) return sum;
 
     // The BSDF's own directions, each adding the first emitter it meets, weighted against light sampling.
     const RayTracer& tracer = scene.ray_tracer();
@@ -163,14 +168,14 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         const Ray ray{origin, bs.direction};
         Hit hit;
         const bool found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays);
-        for (size_t l = 0; l < sources.size(); ++l) {
+        for (size_t l = 0; l < sources.size() && mis; ++l) {
             const Light* light = sources.light(l);
             if (!light || sources.is_delta(l)) continue;
             const LightHit h = intersect_light(*light, x, bs.direction);
             if (!h.hit || (found && !(h.distance < hit.t))) continue;
             bsdf_sum += bs.weight * h.radiance * power_heuristic(bs.pdf, h.pdf);
         }
-        if (found) {
+        if (found && mis) {
             const Material& material =
                 scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]];
             if ((!is_black(material.emission) || material.program_emission) && !material.holdout) {
@@ -183,7 +188,12 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                     bsdf_sum += bs.weight * emitted * power_heuristic(bs.pdf, p_light);
                 }
             }
-        } else {
+        } else if (!found && world_sampled) {
+            // A programmed world: whatever the BSDF sampled, weighted against the world's map (and portals).
+            const float p_light = sources.world().pdf(x, side, bs.direction);
+            bsdf_sum += bs.weight * world_radiance(scene, bs.direction, ShaderRay::reflected) *
+                        power_heuristic(bs.pdf, p_light);
+        } else if (!found) {
             // The world: the lobes' part only (light sampling took Lambert's), f_lobes·cos / pdf.
             glm::vec3 lobes_weight = bs.weight;
             if (!transmission) {

@@ -23,7 +23,7 @@ glm::vec3 point_on_triangle(const WorldTriangle& t, float u1, float u2) {
 float triangle_area(const WorldTriangle& t) { return 0.5f * glm::length(glm::cross(t.v1 - t.v0, t.v2 - t.v0)); }
 }  // namespace
 
-LightSources::LightSources(const Scene& scene) : scene_(scene) {
+LightSources::LightSources(const Scene& scene) : scene_(scene), world_(scene.world_light()) {
     center_ = 0.5f * (scene.bounds_min() + scene.bounds_max());
     radius_ = std::max(0.5f * glm::length(scene.bounds_max() - scene.bounds_min()), 1e-6f);
     for (const Light& light : scene.lights())
@@ -62,10 +62,13 @@ LightSources::LightSources(const Scene& scene) : scene_(scene) {
         emitter_cdf_.back() = 1.0f;
         sources_.push_back({Kind::emissive_surfaces, "emissive surfaces", glm::vec3(flux)});
     }
-    // A uniform environment of radiance L sends 4π · πR² · L through the scene's bounding sphere.
-    const glm::vec3 background = scene.background();
-    if (luminance(background) > 0.0f && scene.triangle_count() > 0)
-        sources_.push_back({Kind::world, "world", 4.0f * kPi * kPi * radius_ * radius_ * background});
+    // A uniform environment of radiance L sends 4π · πR² · L through the scene's bounding sphere; any world
+    // πR² ∫ L dω, or what its portals let in.
+    if (!world_->black() && scene.triangle_count() > 0) {
+        const glm::vec3 flux = world_->constant() ? 4.0f * kPi * kPi * radius_ * radius_ * scene.background()
+                                                  : world_->flux(radius_);
+        if (luminance(flux) > 0.0f && std::isfinite(luminance(flux))) sources_.push_back({Kind::world, "world", flux});
+    }
 }
 
 bool LightSources::is_delta(size_t i) const {
@@ -102,16 +105,7 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
             out.pdf = cos_light > 0.0f ? d2 * pdf_area / cos_light : 0.0f;
             return out;
         }
-        case Kind::world: {
-            // Cosine-weighted about the surface: f·L·cos/pdf = f·L·π, written as value·cos for the caller.
-            LightIncidence out;
-            out.wi = sample_cosine_hemisphere(n, u1, u2);
-            out.distance = std::numeric_limits<float>::infinity();
-            const float cos_n = glm::dot(out.wi, n);
-            out.value = cos_n > 1e-6f ? scene_.background() * (kPi / cos_n) : glm::vec3(0.0f);
-            out.pdf = cos_n > 1e-6f ? cos_n / kPi : 0.0f;  // for MIS against BSDF sampling (direct_light.h)
-            return out;
-        }
+        case Kind::world: return world_->sample_incidence(x, n, u1, u2, u3);
     }
     return {};
 }
@@ -152,17 +146,7 @@ EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float
             out.power = 2.0f * kPi * triangle_area(t) * emission_of(k) / emitter_probability_[k];
             return out;
         }
-        case Kind::world: {
-            // Parallel rays from a disc covering the bounding sphere, placed outside it, in a uniform direction.
-            EmissionSample out;
-            out.direction = sample_uniform_sphere(u1, u2);
-            glm::vec3 b1, b2;
-            orthonormal_basis(out.direction, b1, b2);
-            const float r = radius_ * std::sqrt(u3), phi = 2.0f * kPi * u4;
-            out.origin = center_ - 2.0f * radius_ * out.direction + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
-            out.power = source.flux;
-            return out;
-        }
+        case Kind::world: return world_->sample_emission(center_, radius_, u1, u2, u3, u4, u5);
     }
     return {};
 }

@@ -149,11 +149,65 @@ void Scene::add_light(const Light& light, const glm::dvec3& world_position) {
 void Scene::clear_lights() {
     lights_.clear();
     light_positions_.clear();
+    if (!portals_.empty()) ++world_version_;
+    portals_.clear();
 }
 
 void Scene::set_background(const glm::vec3& radiance) {
     require_nonnegative_rgb(radiance, "background");
     background_ = radiance;
+    ++world_version_;
+}
+
+void Scene::set_world_program(ShaderProgram program, int map_resolution) {
+    const std::string where = "world.program";
+    if (map_resolution < 0 || map_resolution > 65536)
+        throw InvalidInput("world.map_resolution", "must be 0 (automatic) or a width from 1 to 65536");
+    validate(program, 0, where);
+    for (size_t i = 0; i < program.outputs.size(); ++i)
+        if (program.outputs[i].target != ProgramTarget::emission)
+            throw InvalidInput(where + ".outputs[" + std::to_string(i) + "].target",
+                               "must be 'emission': a world program sets only its radiance");
+    finalize_program(program, *this);
+    ++world_version_;
+    world_map_resolution_ = map_resolution;
+    if (program.code.empty()) {
+        // Folded to a constant: the constant background, which costs nothing per ray.
+        glm::vec3 radiance(0.0f);
+        for (const ProgramOutput& o : program.outputs)
+            radiance = glm::vec3(program.registers[size_t(o.register_)], program.registers[size_t(o.register_) + 1],
+                                 program.registers[size_t(o.register_) + 2]);
+        for (int c = 0; c < 3; ++c) radiance[c] = std::isfinite(radiance[c]) ? std::max(radiance[c], 0.0f) : 0.0f;
+        world_program_.reset();
+        background_ = radiance;
+        return;
+    }
+    world_program_ = std::make_unique<ShaderProgram>(std::move(program));
+}
+
+void Scene::clear_world_program() {
+    world_program_.reset();
+    ++world_version_;
+}
+
+void Scene::add_portal(const Portal& portal) {
+    const std::string where = "portal '" + portal.name + "'";
+    if (!within_world(portal.corner)) throw InvalidInput(where + ".corner", "must be finite and within ±1e15 on every axis");
+    const glm::vec3 n = glm::cross(portal.edge_u, portal.edge_v);
+    if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z) || !(glm::length(n) > 0.0f))
+        throw InvalidInput(where + ".edges", "must be finite and span a rectangle of non-zero area");
+    portals_.push_back(portal);
+    ++world_version_;
+}
+
+std::shared_ptr<const WorldLight> Scene::world_light() const {
+    static std::mutex mutex;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!world_light_ || world_light_version_ != world_version_) {
+        world_light_ = std::make_shared<const WorldLight>(*this);
+        world_light_version_ = world_version_;
+    }
+    return world_light_;
 }
 
 uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
@@ -346,6 +400,7 @@ bool Scene::recentre() {
     // coordinates of accepted positions then stay within ±2e15, far inside float's range.
     if (origin == origin_ || !within_world(origin)) return false;
     origin_ = origin;
+    ++world_version_;
     for (Instance& instance : instances_)
         instance.to_world[3] = glm::vec4(glm::vec3(instance.world_translation - origin_), 1.0f);
     for (size_t i = 0; i < lights_.size(); ++i) lights_[i].position = glm::vec3(light_positions_[i] - origin_);

@@ -137,7 +137,9 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (!found) {
             // After a rough transmission the world was that vertex's next-event estimation's, by its BSDF probes
             // alone (direct_light.h): not again here.
-            if (!path.after_lobe) p.emitted += path.throughput * scene.background();
+            if (!path.after_lobe)
+                p.emitted += path.throughput *
+                             world_radiance(scene, ray.direction, path.camera_ray ? ShaderRay::camera : ShaderRay::reflected);
             return;
         }
         const SurfacePoint s = surface_at(scene, ray, hit, from_camera ? ShaderRay::camera : ShaderRay::reflected);

@@ -1,14 +1,18 @@
 // Everything that emits light, as direct light and photon tracing see it: the scene's lights, the emissive
-// surfaces (all triangles of all instances whose material has emission, as one source: Cycles' "mesh lights") and a uniform
-// world background. Built per render from the scene, so a scene without emission pays nothing for it.
+// surfaces (all triangles of all instances whose material has emission, as one source: Cycles' "mesh lights") and the
+// world (world.h: a constant, or a node program importance-sampled through its map and portals). Built per render
+// stage from the scene (the world's map is the scene's, built once per change), so a scene without emission pays
+// nothing for it.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "photonsplat/lights.h"
+#include "photonsplat/world.h"
 
 namespace ps {
 
@@ -22,22 +26,25 @@ public:
     const std::string& name(size_t i) const { return sources_[i].name; }
     glm::vec3 flux(size_t i) const { return sources_[i].flux; }  // [W] sent into the scene
     bool is_delta(size_t i) const;                                // one shadow ray is exact
-    bool is_world(size_t i) const { return sources_[i].kind == Kind::world; }  // the uniform background
+    bool is_world(size_t i) const { return sources_[i].kind == Kind::world; }
+    // The world as a light (never null); constant(): sampled cosine-weighted, the Lambert part's own density.
+    const WorldLight& world() const { return *world_; }
     const Light* light(size_t i) const { return sources_[i].light; }          // nullptr unless a scene light
 
     // Solid-angle density with which sample_incidence of the emissive surfaces draws the point y of
     // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
-    // A sun: its photons start on a disc covering the scene, placed by sample_emission's u1, u2 (an
-    // area-preserving map), which an EmissionGuide may redistribute.
+    // A sun or a programmed world: its photons start on a disc covering the scene (or on a portal), placed by
+    // sample_emission's u1, u2 (an area-preserving map), which an EmissionGuide may redistribute.
     bool emits_from_disc(size_t i) const {
+        if (sources_[i].kind == Kind::world) return !world_->constant();
         return sources_[i].kind == Kind::light && sources_[i].light->kind == LightKind::sun;
     }
 
     // For a shadow ray from x, whose surface has geometric normal n (facing the viewer). u1..u3 in [0, 1).
-    // The returned pdf is the solid-angle density of wi (0 for a delta light); the world is sampled cosine-weighted
-    // about n.
+    // The returned pdf is the solid-angle density of wi (0 for a delta light); a constant world is sampled
+    // cosine-weighted about n, a programmed one by its map (and portals).
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
                                     float u3) const;
     // A photon's starting ray and power. u1..u5 in [0, 1).
@@ -52,6 +59,7 @@ private:
         const Light* light = nullptr;
     };
     const Scene& scene_;
+    std::shared_ptr<const WorldLight> world_;
     glm::vec3 center_;
     float radius_;  // of the scene's bounding sphere
     std::vector<Source> sources_;

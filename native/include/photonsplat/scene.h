@@ -28,7 +28,9 @@
 
 #include "photonsplat/lights.h"
 #include "photonsplat/materials.h"
+#include "photonsplat/shader_program.h"
 #include "photonsplat/textures.h"
+#include "photonsplat/world.h"
 
 namespace ps {
 
@@ -162,6 +164,19 @@ public:
     // the BVH (lights are read afresh by each render). Not to be called while a render of this scene runs.
     void clear_lights();
     void set_background(const glm::vec3& radiance);    // world colour × strength, seen by camera rays
+    // The world as a node program evaluated per direction (world.h): its outputs set only the emission (the
+    // radiance). A program that folds to a constant becomes set_background's constant. map_resolution: width of
+    // the importance map (height: half), 0 = automatic (the widest Environment Texture's image, else 1024).
+    // Validated: throws InvalidInput. clear_world_program() goes back to the constant background.
+    void set_world_program(ShaderProgram program, int map_resolution);
+    void clear_world_program();
+    const ShaderProgram* world_program() const { return world_program_ ? &*world_program_ : nullptr; }
+    int world_map_resolution() const { return world_map_resolution_; }
+    // A rectangle the world lights the scene through (Cycles' portal lights); clear_lights() removes them too.
+    void add_portal(const Portal& portal);
+    const std::vector<Portal>& portals() const { return portals_; }
+    // The world as a light: built on first use after a change of the world, its portals or the origin.
+    std::shared_ptr<const WorldLight> world_light() const;
     // Object Info's colour, pass index and random number of an instance.
     void set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random);
     // The id of a mesh attribute name (UV map or colour attribute) that programs and meshes refer to; names are
@@ -212,6 +227,12 @@ private:
     std::vector<MeshData> meshes_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};
+    std::unique_ptr<ShaderProgram> world_program_;
+    int world_map_resolution_ = 0;
+    std::vector<Portal> portals_;
+    uint64_t world_version_ = 0;  // changes with the world, its portals and the origin
+    mutable std::shared_ptr<const WorldLight> world_light_;
+    mutable uint64_t world_light_version_ = ~uint64_t(0);
     std::vector<std::string> attribute_names_;
     mutable ShaderCamera shader_camera_;
     mutable uint64_t revision_ = 0;

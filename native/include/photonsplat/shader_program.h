@@ -198,6 +198,9 @@ struct ShaderGlobals {
     glm::mat3 world_to_object_linear{1.0f};  // the object transform's inverse linear part
     glm::mat3 object_to_world_linear{1.0f};
     bool backfacing = false;
+    // The world, evaluated for a ray that left the scene (world.h): P is the ray's direction, N = Ng = I = -P,
+    // and the generated, object, camera, window and reflection coordinates are Cycles' for the background.
+    bool background = false;
     // Light Path: what kind of ray arrived
     bool camera_ray = true, shadow_ray = false, diffuse_ray = false, glossy_ray = false, singular_ray = false,
          transmission_ray = false;

@@ -7,7 +7,8 @@
 //   - this pass's caustic photons are gathered (the L S+ D paths of point lights and suns: never counted here);
 //   - one BSDF direction is sampled; whatever light that ray meets next (an analytic light in front of the
 //     first surface, an emissive triangle, a sun's cone when it escapes) is weighted w = p_bsdf² / (p_bsdf² +
-//     p_light²). The world background has no light sampling here, so it always gets w = 1.
+//     p_light²). A constant world has no light sampling here, so it always gets w = 1; a programmed world
+//     is sampled by its map (world.h) like the other sources.
 // After a specular vertex (mirror, glass, smooth glossy) no light sampling could have produced the same path,
 // so lights met there get w = 1 — unless the light is a point light or sun and a non-specular vertex precedes
 // the specular chain: that is an L S+ D path, the photons' (reference.h).
@@ -61,14 +62,14 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
     return v;
 }
 
-// Next-event estimation at x over every source but the world, both sides of the surface (transmission lobes
+// Next-event estimation at x over every source but a constant world, both sides of the surface (transmission lobes
 // see light from behind), weighted against the BSDF sampling of bsdf_sample.
 glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const SurfacePoint& s, Rng& rng,
                         PathCounters& counters) {
     glm::vec3 sum(0.0f);
     const bool transmits = bsdf_has(b, LobeSet::transmission);
     for (size_t l = 0; l < c.sources.size(); ++l) {
-        if (c.sources.is_world(l)) continue;
+        if (c.sources.is_world(l) && c.sources.world().constant()) continue;  // BSDF sampling alone (below)
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
         const LightIncidence in = c.sources.sample_incidence(l, s.position, b.ng, u1, u2, u3);
         const bool front = glm::dot(in.wi, b.ng) > 0.0f;
@@ -129,7 +130,15 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             }
         }
         if (!found) {
-            radiance += throughput * scene.background();  // the world: BSDF sampling only, weight 1
+            // A constant world: BSDF sampling only, weight 1. A programmed one is also light-sampled.
+            const WorldLight& world = c.sources.world();
+            const glm::vec3 L = world_radiance(scene, ray.direction, depth > 0 ? ShaderRay::reflected : ShaderRay::camera);
+            const bool sampled = !world.constant() && !world.black();
+            const float w = sampled ? light_weight(last, false, last.nonspecular && !last.specular_since
+                                                                    ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction)
+                                                                    : 0.0f)
+                                    : 1.0f;
+            radiance += throughput * L * w;
             break;
         }
         const SurfacePoint s = surface_at(scene, ray, hit, depth > 0 ? ShaderRay::reflected : ShaderRay::camera);

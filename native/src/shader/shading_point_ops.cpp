@@ -63,6 +63,7 @@ bool attribute_at(const ShaderGlobals& g, int32_t id, int bump, glm::vec4& value
 }
 
 glm::vec3 generated(const ShaderGlobals& g, int bump) {
+    if (g.background) return g.P;  // Cycles' background: generated coordinates are the direction
     if (g.mesh == nullptr) return glm::vec3(0.0f);
     const glm::vec3 p = object_point(g, bump);
     glm::vec3 r;
@@ -223,10 +224,13 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
             } else {
                 a.set(3, object_point(g, bump_at));
             }
-            a.set(4, transform_point(cam.world_to_camera, p));
-            const glm::vec4 ndc = cam.world_to_ndc * glm::vec4(p, 1.0f);
+            // The background's camera and window coordinates are of the point one unit from the camera along
+            // the direction; its reflection coordinate is I.
+            const glm::vec3 seen = g.background ? p + cam.position : p;
+            a.set(4, transform_point(cam.world_to_camera, seen));
+            const glm::vec4 ndc = cam.world_to_ndc * glm::vec4(seen, 1.0f);
             a.set(5, ndc.w != 0.0f ? glm::vec3(ndc.x / ndc.w, ndc.y / ndc.w, 0.0f) : glm::vec3(0.0f));
-            a.set(6, 2.0f * glm::dot(g.N, g.I) * g.N - g.I);
+            a.set(6, g.background ? g.I : 2.0f * glm::dot(g.N, g.I) * g.N - g.I);
             return true;
         }
         case ShaderOp::uv_map: {
