@@ -495,7 +495,7 @@ def test_camera_sees_one_background_while_another_lights_the_scene(empty_scene, 
     empty_scene.render.resolution_x = empty_scene.render.resolution_y = 32
     empty_scene.render.resolution_percentage = 100
     node_compare.cycles_plane_settings(empty_scene, threads=2)
-    empty_scene.cycles.samples = 64
+    empty_scene.cycles.samples = 128
     cycles = node_compare.render_cycles(tmp_path / "cycles.exr")[..., :3]
     ours, notes, _ = node_compare.photonsplat_case(core, threads=2)
     ours = ours[..., :3]
@@ -507,3 +507,76 @@ def test_camera_sees_one_background_while_another_lights_the_scene(empty_scene, 
           f"{ours[sky].mean(axis=0)}")
     np.testing.assert_allclose(ours[sky], np.broadcast_to((0.1, 0.2, 0.9), ours[sky].shape), rtol=1e-4)
     assert abs(ours[plane].mean() / cycles[plane].mean() - 1.0) < 0.02
+
+
+# --- the real core ---------------------------------------------------------------------------------------------------
+
+def world_programs(core):
+    if not hasattr(core.Scene, "set_world_program"):
+        pytest.skip("this core has no world programs (Scene.set_world_program)")
+    return core
+
+
+def real_sync(core):
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    return sync
+
+
+def test_camera_invisible_world_in_the_core(empty_scene, core):
+    world_programs(core)
+    world = uniform_world(empty_scene, (1.0, 0.5, 0.25), 2.0)
+    world.cycles_visibility.camera = False
+    scene = real_sync(core).scene
+    assert scene.world_programmed
+    up = (0.0, 0.0, 1.0)
+    assert scene.world_radiance(up, camera=True) == pytest.approx((0.0, 0.0, 0.0))
+    assert scene.world_radiance(up, camera=False) == pytest.approx((2.0, 1.0, 0.5), rel=1e-5)
+
+
+def test_camera_ray_mix_in_the_core(empty_scene, core):
+    world_programs(core)
+    world, nodes, links, output = node_world(empty_scene)
+    light_path = nodes.new("ShaderNodeLightPath")
+    lighting = nodes.new("ShaderNodeBackground")
+    lighting.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    seen = nodes.new("ShaderNodeBackground")
+    seen.inputs["Color"].default_value = (0.1, 0.2, 0.9, 1.0)
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(light_path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    links.new(lighting.outputs[0], mix.inputs[1])
+    links.new(seen.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], output.inputs["Surface"])
+    scene = real_sync(core).scene
+    direction = (0.3, -0.4, 0.5)
+    assert scene.world_radiance(direction, camera=True) == pytest.approx((0.1, 0.2, 0.9), rel=1e-5)
+    assert scene.world_radiance(direction, camera=False) == pytest.approx((1.0, 1.0, 1.0), rel=1e-5)
+
+
+def test_constant_world_is_not_programmed_in_the_core(empty_scene, core):
+    world_programs(core)
+    uniform_world(empty_scene, (0.5, 0.5, 0.5), 1.0)
+    scene = real_sync(core).scene
+    assert not scene.world_programmed
+    assert scene.world_map_info()["constant"]
+
+
+def test_map_resolution_reaches_the_core(empty_scene, core):
+    world_programs(core)
+    world, _, _ = hdri_world(empty_scene)
+    world.cycles.sampling_method = 'MANUAL'
+    world.cycles.sample_map_resolution = 64
+    info = real_sync(core).scene.world_map_info()
+    assert (info["map_width"], info["map_height"]) == (64, 32)
+    world.cycles.sampling_method = 'AUTOMATIC'            # the Environment Texture's width, 8
+    world.update_tag()                                    # (the UI tags the world; Python alone does not)
+    info = real_sync(core).scene.world_map_info()
+    assert info["map_width"] == 8
+
+
+def test_portals_reach_the_core(empty_scene, core):
+    world_programs(core)
+    uniform_world(empty_scene)
+    portal_light(empty_scene)
+    sync = real_sync(core)
+    assert sync.scene.portal_count == 1 and sync.scene.light_count == 0
