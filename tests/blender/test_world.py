@@ -602,3 +602,43 @@ def test_portal_at_the_open_front_matches_cycles(diffuse_scene, core, tmp_path):
     assert sync.scene.portal_count == 1 and sync.lights == 0
     # (2.5 %: the same portal turned the other way, out of the box, renders 3 % darker.)
     assert abs(compare(diffuse_scene, tmp_path, "WORLD through a portal") - 1.0) < 0.025
+
+
+def test_viewport_world_edits_render_in_place(empty_scene, core):
+    """In the viewport's incremental path with the real core: a rotated mapping, then another image, change what the
+    camera sees in the same core scene (no rebuild), and the image is added once."""
+    world_programs(core)
+    world, mapping, environment = hdri_world(empty_scene, image=equirect_image("Fine", 32, 16))
+    environment.interpolation = 'Closest'
+    sky_scene(empty_scene)
+    empty_scene.render.resolution_x = empty_scene.render.resolution_y = 16
+    empty_scene.render.resolution_percentage = 100
+    props = empty_scene.photonsplat
+    props.photons, props.iterations, props.time_limit, props.threads = 1000, 1, 0.0, 2
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+
+    def render(scene):
+        image, _ = core.render(scene, frame.camera, frame.settings)
+        return np.asarray(image, dtype=np.float32)[..., :3]
+
+    sync = export.BlenderSync(core)
+    sync.sync(bpy.context.evaluated_depsgraph_get())
+    scene = sync.scene
+    first = render(scene)
+    np.testing.assert_allclose(first, render(frame.scene), rtol=1e-6)
+    textures = scene.texture_count if hasattr(scene, "texture_count") else None
+    with DepsgraphUpdates(sync) as updates:
+        mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(90.0))
+        reports = updates.evaluate()
+        assert any(r.world for r in reports) and not any(r.rebuilt for r in reports), reports
+        assert sync.scene is scene
+        rotated = render(scene)
+        assert np.abs(rotated - first).max() > 0.1
+        if textures is not None:
+            assert scene.texture_count == textures
+
+        environment.image = equirect_image("Other", 16, 8)
+        reports = updates.evaluate()
+        assert any(r.world for r in reports), reports
+        other = render(sync.scene)
+        assert np.abs(other - rotated).max() > 0.01
