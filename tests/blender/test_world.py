@@ -668,3 +668,19 @@ def test_hdri_file_reaches_the_core_as_blender_reads_it(empty_scene, core, tmp_p
         pytest.xfail("textures.py does not know the colour space 'Linear Rec.709' (decodes the file as sRGB)")
     assert not [n for n in sync.notes if n.startswith("World")], sync.notes
     assert radiance == pytest.approx(tuple(texels[:3]), rel=1e-4)
+
+
+def test_gradient_over_the_direction_in_the_core(empty_scene, core):
+    """A Gradient Texture on the unconnected (Generated) coordinates: the world's Generated is the direction."""
+    world_programs(core)
+    world, nodes, links, output = node_world(empty_scene)
+    gradient = nodes.new("ShaderNodeTexGradient")                # linear: x, clamped to [0, 1]
+    background = nodes.new("ShaderNodeBackground")
+    background.inputs["Strength"].default_value = 2.0
+    links.new(gradient.outputs["Color"], background.inputs["Color"])
+    links.new(background.outputs[0], output.inputs["Surface"])
+    scene = real_sync(core).scene
+    assert scene.world_programmed
+    assert scene.world_radiance((1.0, 0.0, 0.0)) == pytest.approx((2.0, 2.0, 2.0), rel=1e-5)
+    assert scene.world_radiance((0.6, 0.8, 0.0)) == pytest.approx((1.2, 1.2, 1.2), rel=1e-5)
+    assert scene.world_radiance((-1.0, 0.0, 0.0)) == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)
