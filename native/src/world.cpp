@@ -18,12 +18,15 @@ namespace ps {
 namespace {
 constexpr float kPi = 3.14159265358979323846f;
 constexpr int kDefaultMapWidth = 1024;  // Cycles' default Map Resolution
-constexpr int kMaxMapWidth = 8192;
+constexpr int kMaxMapWidth = 4096;  // 8 M cells, 128 MB with the CDFs: larger maps are capped
 // Cells averaged per axis while baking (for maps up to this many cells; larger ones are fine enough as they are).
 constexpr size_t kSupersampledCells = size_t(1024) * 512;
 // With portals, the share of the world's photons that start on them (the rest come from the disc and are dropped
 // where they would enter through a portal, so that no path is counted twice).
 constexpr float kPortalPhotons = 0.9f;
+// A focus (what the camera sees) is used when it is this much smaller than the scene: otherwise the scene's disc
+// is as good.
+constexpr float kFocusBelow = 0.7f;
 
 float lum(const glm::vec3& c) { return environment_luminance(c); }
 
@@ -270,8 +273,9 @@ float WorldLight::pdf(const glm::vec3& x, const glm::vec3& n, const glm::vec3& w
     return use_map ? 0.5f * (portal + map_pdf(wi)) : portal;
 }
 
-EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius, float u1, float u2, float u3,
-                                           float u4, float u5) const {
+EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius, const glm::vec3& focus_center,
+                                           float focus_radius, float u1, float u2, float u3, float u4,
+                                           float u5) const {
     EmissionSample out;
     out.power = glm::vec3(0.0f);
     out.origin = center;
@@ -311,11 +315,32 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
         out.power = L * (r.area * cos_in / (s.pdf * p_k * kPortalPhotons));
         return out;
     }
+    const float share = portal_cdf_.empty() ? 1.0f : 1.0f - kPortalPhotons;
+    float pick = portal_cdf_.empty() ? u5 : (u5 - kPortalPhotons) / (1.0f - kPortalPhotons);
+    // From the disc covering the scene, or (half of them) from the one covering what the camera sees, both
+    // perpendicular to the direction and 2R before the scene's centre; the power divides by the mixture's
+    // density at the photon's line (one-sample MIS, balance heuristic), so each disc's photons count once.
+    const bool focused = focus_radius > 0.0f && focus_radius < kFocusBelow * radius &&
+                         glm::length(focus_center - center) + focus_radius <= 2.0f * radius;
+    const bool on_focus = focused && pick < 0.5f;
+    const glm::vec3 disc_center = on_focus ? focus_center : center;
+    const float disc_radius = on_focus ? focus_radius : radius;
     glm::vec3 b1, b2;
     orthonormal_basis(out.direction, b1, b2);
-    const float r = radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
-    out.origin = center - 2.0f * radius * out.direction + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
-    const float share = portal_cdf_.empty() ? 1.0f : 1.0f - kPortalPhotons;
+    const float r = disc_radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
+    const glm::vec3 on_line = disc_center + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
+    out.origin = on_line - (glm::dot(on_line - center, out.direction) + 2.0f * radius) * out.direction;
+    // Area density of the line on a plane perpendicular to it.
+    const auto inside = [&](const glm::vec3& c, float rad) {
+        const glm::vec3 v = out.origin - c;
+        const glm::vec3 across = v - glm::dot(v, out.direction) * out.direction;
+        return glm::dot(across, across) <= rad * rad * (1.0f + 1e-5f);
+    };
+    float density = 1.0f / (kPi * radius * radius);
+    if (focused)
+        density = 0.5f * ((inside(center, radius) ? 1.0f / (kPi * radius * radius) : 0.0f) +
+                          (inside(focus_center, focus_radius) ? 1.0f / (kPi * focus_radius * focus_radius) : 0.0f));
+    if (!(density > 0.0f)) return out;
     if (tracer != nullptr) {
         // What enters through a portal is the portal photons' (above): a disc photon that would is dropped.
         Hit hit;
@@ -330,7 +355,7 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
                 return out;
         }
     }
-    out.power = L * (kPi * radius * radius / (s.pdf * share));
+    out.power = L / (s.pdf * density * share);
     return out;
 }
 
