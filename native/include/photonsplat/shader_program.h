@@ -92,6 +92,12 @@ namespace ps {
     X(gradient_texture,  1, "v",      "vf")  /* params: type (0 linear, 1 quadratic, 2 easing, 3 diagonal,        */ \
                                              /* 4 spherical, 5 quadratic sphere, 6 radial); vector; color, fac */  \
     X(white_noise_texture, 1, "vf",   "fv")  /* params: dimensions; vector, w; value, color */                     \
+    /* params: sky type (0 Preetham, 1 Hosek / Wilkie: evaluated as Preetham, 2 Nishita), sun disc (0, 1),     */ \
+    /* settings (tables offset of kSkySettingsFloats: sun direction xyz, turbidity, ground albedo, sun size,     */ \
+    /* sun intensity, sun elevation, sun rotation, altitude, air, dust, ozone density), precomputed (tables     */ \
+    /* offset of the sky's precomputed data, -1: finalize_program computes it, nodes/sky_texture.h); vector;    */ \
+    /* color */                                                                                                   \
+    X(sky_texture,       4, "v",      "v")                                                                         \
     /* --- converters (nodes/converter_nodes.cpp) --- */                                                          \
     X(math,              2, "fff",    "f")   /* params: operation (NodeMathType), clamp */                         \
     X(vector_math,       1, "vvvf",   "vf")  /* params: operation (NodeVectorMathType); a, b, c, scale */          \
