@@ -548,6 +548,7 @@ def test_sky_texture_compiles_to_its_op(empty_scene, op_table, sky_type, expecte
     settings = program["tables"][skies[0][2]:skies[0][2] + 13]
     assert settings[7] == pytest.approx(sky.sun_elevation) and settings[3] == pytest.approx(sky.turbidity)
     assert any("Hosek" in n for n in spec.notes) == (sky_type == "HOSEK_WILKIE")
+    assert any("Single Scattering" in n for n in spec.notes) == (sky_type == "SINGLE_SCATTERING")
 
 
 def test_sky_texture_with_sun_disc_ignores_its_vector(empty_scene, op_table):

@@ -869,9 +869,9 @@ def _n_white_noise(b, node, stack):
     return _outs(["Value", "Color"], b.emit("white_noise_texture", [_dims(node.noise_dimensions)], inputs))
 
 
-# Sky Texture: the core's sky types (shader_program.h's sky_texture). Blender 4.x/5.x name Nishita's variants
-# 'SINGLE_SCATTERING' (Blender 3.4's Nishita) and 'MULTIPLE_SCATTERING' (no 3.4 equivalent: single scattering
-# is used, noted).
+# Sky Texture: the core's sky types (shader_program.h's sky_texture). Blender 5.0 names Nishita's variants
+# 'SINGLE_SCATTERING' (3.4's Nishita above the horizon) and 'MULTIPLE_SCATTERING' (no 3.4 equivalent: single
+# scattering is used); both are noted.
 _SKY_TYPES = {"PREETHAM": 0, "HOSEK_WILKIE": 1, "NISHITA": 2, "SINGLE_SCATTERING": 2, "MULTIPLE_SCATTERING": 2}
 
 
@@ -896,6 +896,11 @@ def _n_sky_texture(b, node, stack):
     elif kind == "MULTIPLE_SCATTERING":
         b.notes.append("Sky Texture 'Multiple Scattering' approximated by Blender 3.4's single-scattering Nishita "
                        "sky")
+    elif kind == "SINGLE_SCATTERING":
+        # Blender 5.0 precomputes its texture over the whole sphere (black below the horizon) and folds sun
+        # elevations beyond 90 degrees: the sky above the horizon is 3.4's, the rest may differ.
+        b.notes.append("Sky Texture 'Single Scattering' evaluated as Blender 3.4's Nishita sky (the ground below "
+                       "the horizon may differ)")
     disc = bool(getattr(node, "sun_disc", True)) and sky == 2
     direction = tuple(float(c) for c in _prop(node, ("sun_direction",), (0.0, 0.0, 1.0)))
     settings = list(direction[:3]) + [
