@@ -90,6 +90,7 @@ def build_scene():
     sky = nt.nodes.new("ShaderNodeTexSky")
     attr = nt.nodes.new("ShaderNodeAttribute")
     attr.attribute_name = "dir"
+    sky.sun_disc = False  # Blender 4.x/5.x have no Vector socket at all with Nishita's disc
     nt.links.new(attr.outputs["Vector"], sky.inputs["Vector"])
     nt.links.new(sky.outputs["Color"], emit.inputs["Color"])
     nt.links.new(emit.outputs["Emission"], out.inputs["Surface"])
