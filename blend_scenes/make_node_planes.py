@@ -311,6 +311,47 @@ for projection in ('EQUIRECTANGULAR', 'MIRROR_BALL'):
     simple(f"environment_{projection.lower()}", build, obj="Dome", node="environment")
 
 
+# -- sky: directions made from the plane's object coordinates (x, y in [-1, 1]), normalised: "upper" spans the sky
+# from about 20 degrees above the horizon to the zenith, "horizon" crosses it into the ground's fade. With
+# Nishita's sun disc the Vector socket is unavailable and Cycles evaluates the Generated coordinates, (u, v, 0.5)
+# on the flat plane: sky_nishita_disc puts a large sun (40 degrees) where those point, at (1, 1, 1).
+def sky_direction(t, kind):
+    sep = t.new("ShaderNodeSeparateXYZ", Vector=t.coord("Object"))
+    if kind == "upper":
+        vec = t.new("ShaderNodeCombineXYZ", X=sep.outputs[0], Y=sep.outputs[1], Z=0.4)
+    else:
+        z = t.new("ShaderNodeMath", {"operation": 'MULTIPLY'}, in0=sep.outputs[1], in1=0.6)
+        vec = t.new("ShaderNodeCombineXYZ", X=sep.outputs[0], Y=0.6, Z=z.outputs[0])
+    return t.new("ShaderNodeVectorMath", {"operation": 'NORMALIZE'}, in0=vec.outputs[0]).outputs[0]
+
+
+SKY_CASES = [
+    ("sky_nishita_upper", "Plane", "upper", {"sky_type": 'NISHITA', "sun_disc": False}),
+    ("sky_nishita_horizon", "Plane", "horizon", {"sky_type": 'NISHITA', "sun_disc": False,
+                                                 "sun_rotation": math.radians(30.0)}),
+    ("sky_nishita_atmosphere", "Plane", "upper", {"sky_type": 'NISHITA', "sun_disc": False,
+                                                  "sun_elevation": math.radians(5.0),
+                                                  "sun_rotation": math.radians(120.0), "altitude": 2000.0,
+                                                  "air_density": 2.0, "dust_density": 4.0, "ozone_density": 3.0}),
+    ("sky_nishita_default_vector", "Dome", None, {"sky_type": 'NISHITA', "sun_disc": False,
+                                                  "sun_elevation": math.radians(40.0)}),
+    ("sky_nishita_disc", "Plane", None, {"sky_type": 'NISHITA', "sun_disc": True, "sun_size": math.radians(40.0),
+                                         "sun_elevation": math.asin(1.0 / math.sqrt(3.0)),
+                                         "sun_rotation": math.radians(45.0), "sun_intensity": 0.05}),
+    ("sky_preetham", "Plane", "upper", {"sky_type": 'PREETHAM', "sun_direction": (0.3, -0.6, 0.5)}),
+    ("sky_preetham_hazy_horizon", "Plane", "horizon", {"sky_type": 'PREETHAM', "turbidity": 7.0,
+                                                       "sun_direction": (-0.8, 0.4, 0.15)}),
+    ("sky_hosek", "Plane", "upper", {"sky_type": 'HOSEK_WILKIE', "sun_direction": (0.3, -0.6, 0.5)}),
+]
+for name, obj, kind, props in SKY_CASES:
+    def build(t, kind=kind, props=props):
+        node = t.new("ShaderNodeTexSky", props)
+        if kind is not None:
+            t.link(sky_direction(t, kind), node.inputs["Vector"])
+        return node.outputs["Color"]
+    simple(name, build, obj=obj, node="sky")
+
+
 # -- math: a representative set with edge cases (inputs from the UV coordinates so each spans a range)
 def math_case(op, a, b=None, c=None, clamp=False, label=None):
     def build(t):

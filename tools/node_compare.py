@@ -67,6 +67,10 @@ DIAGNOSED = {
         "`bump_invert_noise`): a different finite-difference step (the ray differential on the inclined surface) "
         "is the likely cause."),
     "fresnel_of_bumped_normal": "Fresnel of the normal of `bump_wave_height`: the Bump's difference (Fresnel alone passes).",
+    "sky_hosek": (
+        "Approximated on purpose: the Hosek / Wilkie model's dataset is not reproduced, the sky_texture op evaluates "
+        "Preetham's sky for the same sun direction and turbidity (the compiler notes it). Preetham itself passes "
+        "(`sky_preetham`)."),
 }
 
 

@@ -146,7 +146,8 @@ EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float
             out.power = 2.0f * kPi * triangle_area(t) * emission_of(k) / emitter_probability_[k];
             return out;
         }
-        case Kind::world: return world_->sample_emission(center_, radius_, u1, u2, u3, u4, u5);
+        case Kind::world:
+            return world_->sample_emission(center_, radius_, focus_center_, focus_radius_, u1, u2, u3, u4, u5);
     }
     return {};
 }

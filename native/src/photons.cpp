@@ -223,7 +223,8 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     StageTimer timer(stats, "photon_trace");
     PhotonMap map;
     map.emitted = settings.count;
-    const LightSources sources(scene);
+    LightSources sources(scene);
+    sources.set_focus(settings.focus_center, settings.focus_radius);
     const SourceChoice choice = choose_sources_by_power(sources);
     if (choice.cdf.empty() || settings.count == 0 || scene.triangle_count() == 0) return map;
 

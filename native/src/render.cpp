@@ -1,6 +1,7 @@
 #include "photonsplat/render.h"
 
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -145,6 +146,21 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
     return film;
 }
 
+
+// The sphere around the view samples (render space), where photons are useful (radius 0 without samples).
+void view_sample_sphere(const ViewSamples& samples, glm::vec3& center, float& radius) {
+    radius = 0.0f;
+    if (samples.samples.empty()) return;
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    for (const ViewSample& s : samples.samples) {
+        lo = glm::min(lo, s.position);
+        hi = glm::max(hi, s.position);
+    }
+    center = samples.origin + 0.5f * (lo + hi);
+    radius = 0.5f * glm::length(hi - lo);
+    if (!std::isfinite(radius) || !std::isfinite(center.x + center.y + center.z)) radius = 0.0f;
+}
+
 }  // namespace
 
 RenderResult render_iteration(const Scene& scene, const Camera& world_camera, const RenderSettings& settings,
@@ -199,6 +215,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         photon_settings.seed = seed;
         photon_settings.guide = settings.guide_photons;
         photon_settings.aimed_fraction = settings.aimed_photons;
+        view_sample_sphere(samples, photon_settings.focus_center, photon_settings.focus_radius);
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
         const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
         const PhotonMap caustic_photons = caustics_output ? caustic_photons_of(photons) : PhotonMap();

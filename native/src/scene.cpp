@@ -587,8 +587,19 @@ void report_scene(const Scene& scene, Stats& stats) {
     stats.counters["triangles"] = static_cast<double>(scene.triangle_count());
     stats.counters["dropped_triangles"] = static_cast<double>(scene.dropped_triangles());
     stats.counters["lights"] = static_cast<double>(scene.lights().size());
-    StageTimer t(stats, "scene_build");
-    stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
+    {
+        StageTimer t(stats, "scene_build");
+        stats.bytes["embree_scene"] = static_cast<double>(scene.ray_tracer().bytes());
+    }
+    // The world's importance map, baked once per change of the world (world.h).
+    if (scene.world_program() != nullptr || !scene.portals().empty()) {
+        StageTimer t(stats, "world_map");
+        const auto world = scene.world_light();
+        if (world->map()) {
+            stats.counters["world_map_cells"] = double(world->map()->width()) * double(world->map()->height());
+            stats.bytes["world_map"] = double(world->map()->width()) * double(world->map()->height()) * 4.0 * sizeof(float);
+        }
+    }
 }
 
 }  // namespace ps

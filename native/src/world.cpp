@@ -9,16 +9,24 @@
 #include <tbb/parallel_for.h>
 
 #include "photonsplat/scene.h"
+#include "photonsplat/ray_tracer.h"
 #include "photonsplat/shader_program.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
 namespace {
 constexpr float kPi = 3.14159265358979323846f;
 constexpr int kDefaultMapWidth = 1024;  // Cycles' default Map Resolution
-constexpr int kMaxMapWidth = 8192;
+constexpr int kMaxMapWidth = 4096;  // 8 M cells, 128 MB with the CDFs: larger maps are capped
 // Cells averaged per axis while baking (for maps up to this many cells; larger ones are fine enough as they are).
 constexpr size_t kSupersampledCells = size_t(1024) * 512;
+// With portals, the share of the world's photons that start on them (the rest come from the disc and are dropped
+// where they would enter through a portal, so that no path is counted twice).
+constexpr float kPortalPhotons = 0.9f;
+// A focus (what the camera sees) is used when it is this much smaller than the scene: otherwise the scene's disc
+// is as good.
+constexpr float kFocusBelow = 0.7f;
 
 float lum(const glm::vec3& c) { return environment_luminance(c); }
 
@@ -64,7 +72,8 @@ glm::vec3 world_radiance(const Scene& scene, const glm::vec3& direction, ShaderR
         if (o.target == ProgramTarget::emission)
             out = glm::vec3(registers[size_t(o.register_)], registers[size_t(o.register_) + 1],
                             registers[size_t(o.register_) + 2]);
-    for (int c = 0; c < 3; ++c) out[c] = std::isfinite(out[c]) ? std::max(out[c], 0.0f) : 0.0f;
+    // As accepted constants: >= 0 and at most kMaxEmission (validation.h), so that sums over a map stay finite.
+    for (int c = 0; c < 3; ++c) out[c] = std::isfinite(out[c]) ? std::clamp(out[c], 0.0f, kMaxEmission) : 0.0f;
     return out;
 }
 
@@ -153,11 +162,12 @@ WorldLight::WorldLight(const Scene& scene) : scene_(scene), background_(scene.ba
     } else {
         portal_cdf_.clear();
     }
-    black_ = map_->is_zero() || (!portals_.empty() && portal_cdf_.empty());
+    black_ = map_->is_zero();
 }
 
 glm::vec3 WorldLight::flux(float scene_radius) const {
-    if (!portals_.empty()) return portal_flux_;
+    // With portals, what they let in: the light an interior is lit by (photons choose sources by it).
+    if (!portal_cdf_.empty()) return portal_flux_;
     return kPi * scene_radius * scene_radius * integral_;
 }
 
@@ -263,8 +273,9 @@ float WorldLight::pdf(const glm::vec3& x, const glm::vec3& n, const glm::vec3& w
     return use_map ? 0.5f * (portal + map_pdf(wi)) : portal;
 }
 
-EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius, float u1, float u2, float u3,
-                                           float u4, float u5) const {
+EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius, const glm::vec3& focus_center,
+                                           float focus_radius, float u1, float u2, float u3, float u4,
+                                           float u5) const {
     EmissionSample out;
     out.power = glm::vec3(0.0f);
     out.origin = center;
@@ -284,9 +295,11 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
     if (!(s.pdf > 0.0f)) return out;
     out.direction = -s.direction;  // the photon travels away from where its light comes from
     const glm::vec3 L = world_radiance(scene_, s.direction, ShaderRay::shadow);
-    if (!portals_.empty()) {
-        if (portal_cdf_.empty()) return out;
-        const size_t k = std::min(size_t(std::upper_bound(portal_cdf_.begin(), portal_cdf_.end(), u5) -
+    const RayTracer* tracer = portal_cdf_.empty() ? nullptr : &scene_.ray_tracer();
+    if (!portal_cdf_.empty() && u5 < kPortalPhotons) {
+        // Through a portal: a point on it and the map's direction, if nothing outside blocks the way to the sky.
+        const float u = u5 / kPortalPhotons;
+        const size_t k = std::min(size_t(std::upper_bound(portal_cdf_.begin(), portal_cdf_.end(), u) -
                                          portal_cdf_.begin()),
                                   portals_.size() - 1);
         const Rect& r = portals_[k];
@@ -294,15 +307,55 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
         const float cos_in = glm::dot(out.direction, r.normal);
         if (!(cos_in > 0.0f) || !(p_k > 0.0f)) return out;  // would leave the room: no light this way
         out.origin = r.corner + u1 * r.edge_u + u2 * r.edge_v;
+        Hit hit;
+        if (tracer->intersect(Ray{out.origin, s.direction}, 0.0f, std::numeric_limits<float>::infinity(), hit,
+                              kIndirectRays))
+            return out;
         // L · A · cos / (pdf(ω) · P(portal)): a point uniform on the portal, a direction from the map.
-        out.power = L * (r.area * cos_in / (s.pdf * p_k));
+        out.power = L * (r.area * cos_in / (s.pdf * p_k * kPortalPhotons));
         return out;
     }
+    const float share = portal_cdf_.empty() ? 1.0f : 1.0f - kPortalPhotons;
+    float pick = portal_cdf_.empty() ? u5 : (u5 - kPortalPhotons) / (1.0f - kPortalPhotons);
+    // From the disc covering the scene, or (half of them) from the one covering what the camera sees, both
+    // perpendicular to the direction and 2R before the scene's centre; the power divides by the mixture's
+    // density at the photon's line (one-sample MIS, balance heuristic), so each disc's photons count once.
+    const bool focused = focus_radius > 0.0f && focus_radius < kFocusBelow * radius &&
+                         glm::length(focus_center - center) + focus_radius <= 2.0f * radius;
+    const bool on_focus = focused && pick < 0.5f;
+    const glm::vec3 disc_center = on_focus ? focus_center : center;
+    const float disc_radius = on_focus ? focus_radius : radius;
     glm::vec3 b1, b2;
     orthonormal_basis(out.direction, b1, b2);
-    const float r = radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
-    out.origin = center - 2.0f * radius * out.direction + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
-    out.power = L * (kPi * radius * radius / s.pdf);
+    const float r = disc_radius * std::sqrt(u1), phi = 2.0f * kPi * u2;
+    const glm::vec3 on_line = disc_center + r * (std::cos(phi) * b1 + std::sin(phi) * b2);
+    out.origin = on_line - (glm::dot(on_line - center, out.direction) + 2.0f * radius) * out.direction;
+    // Area density of the line on a plane perpendicular to it.
+    const auto inside = [&](const glm::vec3& c, float rad) {
+        const glm::vec3 v = out.origin - c;
+        const glm::vec3 across = v - glm::dot(v, out.direction) * out.direction;
+        return glm::dot(across, across) <= rad * rad * (1.0f + 1e-5f);
+    };
+    float density = 1.0f / (kPi * radius * radius);
+    if (focused)
+        density = 0.5f * ((inside(center, radius) ? 1.0f / (kPi * radius * radius) : 0.0f) +
+                          (inside(focus_center, focus_radius) ? 1.0f / (kPi * focus_radius * focus_radius) : 0.0f));
+    if (!(density > 0.0f)) return out;
+    if (tracer != nullptr) {
+        // What enters through a portal is the portal photons' (above): a disc photon that would is dropped.
+        Hit hit;
+        const float far = tracer->intersect(Ray{out.origin, out.direction}, 0.0f,
+                                            std::numeric_limits<float>::infinity(), hit, kIndirectRays)
+                              ? hit.t
+                              : std::numeric_limits<float>::infinity();
+        for (const Rect& p : portals_) {
+            float d = 0.0f;
+            if (glm::dot(out.direction, p.normal) > 0.0f &&
+                through_rect(p.corner, p.edge_u, p.edge_v, p.normal, out.origin, out.direction, d) && d < far)
+                return out;
+        }
+    }
+    out.power = L / (s.pdf * density * share);
     return out;
 }
 

@@ -1,4 +1,4 @@
-"""Shader node programs against Cycles, pixel by pixel, on a dozen representative cases of
+"""Shader node programs against Cycles, pixel by pixel, on nineteen representative cases of
 blend_scenes/make_node_planes.py at 32 x 32 (the full set: tools/node_compare.py, docs/results/node_programs.md).
 
 Each case is a node driving an Emission shader (strength 1) on a plane filling an orthographic camera. Cycles renders
@@ -39,6 +39,9 @@ CASES = [
     "mapping_point",
     "attribute_vertexcolor_color",
     "fresnel_1.45",
+    "sky_nishita_horizon",
+    "sky_nishita_disc",
+    "sky_preetham",
 ]
 
 

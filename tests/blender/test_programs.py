@@ -516,9 +516,55 @@ def test_principled_of_this_blender_compiles(empty_scene, op_table):
     assert any(o["target"] == "closure_color" for o in program["outputs"])
 
 
+# --- the Sky Texture ---------------------------------------------------------------------------------------------
+
+def _sky_material(sky_type, sun_disc=True, mapping=False):
+    mat, tree, shader = diffuse_material("sky")
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    types = {item.identifier for item in sky.bl_rna.properties["sky_type"].enum_items}
+    if sky_type not in types:
+        pytest.skip(f"Sky Texture has no type {sky_type} in Blender {bpy.app.version_string}")
+    sky.sky_type = sky_type
+    sky.sun_disc = sun_disc
+    if mapping and sky.inputs.get("Vector") is not None:  # Blender 5.0 drops the socket with the sun disc
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        rotate = tree.nodes.new("ShaderNodeMapping")
+        rotate.inputs["Rotation"].default_value = (0.0, 0.0, 0.7)
+        tree.links.new(coords.outputs["Object"], rotate.inputs["Vector"])
+        tree.links.new(rotate.outputs["Vector"], sky.inputs["Vector"])
+    tree.links.new(sky.outputs["Color"], shader.inputs["Color"])
+    return mat, sky
+
+
+@pytest.mark.parametrize("sky_type,expected", [("NISHITA", 2), ("SINGLE_SCATTERING", 2), ("PREETHAM", 0),
+                                               ("HOSEK_WILKIE", 1)])
+def test_sky_texture_compiles_to_its_op(empty_scene, op_table, sky_type, expected):
+    mat, sky = _sky_material(sky_type, sun_disc=False, mapping=True)
+    spec, program, code = program_of(mat, op_table)
+    check_encoding(program, op_table)
+    skies = [params for name, params, _, _ in code if name == "sky_texture"]
+    assert len(skies) == 1 and skies[0][0] == expected and skies[0][3] == -1
+    assert "mapping" in names(code)  # the Vector's link is followed
+    settings = program["tables"][skies[0][2]:skies[0][2] + 13]
+    assert settings[7] == pytest.approx(sky.sun_elevation) and settings[3] == pytest.approx(sky.turbidity)
+    assert any("Hosek" in n for n in spec.notes) == (sky_type == "HOSEK_WILKIE")
+    assert any("Single Scattering" in n for n in spec.notes) == (sky_type == "SINGLE_SCATTERING")
+
+
+def test_sky_texture_with_sun_disc_ignores_its_vector(empty_scene, op_table):
+    mat, sky = _sky_material("NISHITA" if "NISHITA" in {i.identifier for i in bpy.types.ShaderNodeTexSky.bl_rna
+                                                          .properties["sky_type"].enum_items} else "SINGLE_SCATTERING",
+                             sun_disc=True, mapping=True)
+    spec, program, code = program_of(mat, op_table)
+    vector = sky.inputs.get("Vector")
+    disabled = vector is None or not vector.enabled
+    assert ("mapping" in names(code)) != disabled
+    assert [params[1] for name, params, _, _ in code if name == "sky_texture"] == [1]
+
+
 # --- what is not supported ------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("idname", ["ShaderNodeTexSky", "ShaderNodeTexPointDensity", "ShaderNodeTexIES",
+@pytest.mark.parametrize("idname", ["ShaderNodeTexPointDensity", "ShaderNodeTexIES",
                                     "ShaderNodeAmbientOcclusion", "ShaderNodeBevel", "ShaderNodeWireframe",
                                     "ShaderNodeLightFalloff", "ShaderNodeScript", "ShaderNodeTangent",
                                     "ShaderNodeParticleInfo"])

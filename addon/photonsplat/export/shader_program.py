@@ -12,7 +12,7 @@ registers). Each node is compiled once per (node, group nesting, bump offset): a
 subgraph three times, with the shading point ops' `bump` param 0, 1 and 2.
 
 Every node of Cycles 3.4's SVM that reads the shading point or computes is compiled to its op (NODES lists them);
-anything else (Sky, Point Density, IES, AO, Bevel, Wireframe, Script, Light Falloff, ...) gives its output
+anything else (Point Density, IES, AO, Bevel, Wireframe, Script, Light Falloff, ...) gives its output
 sockets' own default values (black, 0) and a note names the node. Nodes of Blender 4.x/5.x map to the 3.4 ops
 where they match exactly and are approximated with a note where they do not (Noise's fractal types and
 Lacunarity, Voronoi's Detail, Math's Floored Modulo, Mix's Exclusion...).
@@ -869,6 +869,64 @@ def _n_white_noise(b, node, stack):
     return _outs(["Value", "Color"], b.emit("white_noise_texture", [_dims(node.noise_dimensions)], inputs))
 
 
+# Sky Texture: the core's sky types (shader_program.h's sky_texture). Blender 5.0 names Nishita's variants
+# 'SINGLE_SCATTERING' (3.4's Nishita above the horizon) and 'MULTIPLE_SCATTERING' (no 3.4 equivalent: single
+# scattering is used); both are noted.
+_SKY_TYPES = {"PREETHAM": 0, "HOSEK_WILKIE": 1, "NISHITA": 2, "SINGLE_SCATTERING": 2, "MULTIPLE_SCATTERING": 2}
+
+
+def _prop(node, names, default):
+    """The first of `names` that the node has (properties renamed between Blender versions)."""
+    for name in names:
+        value = getattr(node, name, None)
+        if value is not None:
+            return value
+    return default
+
+
+def _n_sky_texture(b, node, stack):
+    kind = getattr(node, "sky_type", "NISHITA")
+    sky = _SKY_TYPES.get(kind)
+    if sky is None:
+        b.notes.append(f"Sky Texture type '{kind}' not known: the Nishita sky used")
+        sky = 2
+    if kind == "HOSEK_WILKIE":
+        b.notes.append("Hosek / Wilkie sky approximated by Preetham (same sun direction and turbidity; the ground "
+                       "albedo is not used)")
+    elif kind == "MULTIPLE_SCATTERING":
+        b.notes.append("Sky Texture 'Multiple Scattering' approximated by Blender 3.4's single-scattering Nishita "
+                       "sky")
+    elif kind == "SINGLE_SCATTERING":
+        # Blender 5.0 precomputes its texture over the whole sphere (black below the horizon) and folds sun
+        # elevations beyond 90 degrees: the sky above the horizon is 3.4's, the rest may differ.
+        b.notes.append("Sky Texture 'Single Scattering' evaluated as Blender 3.4's Nishita sky (the ground below "
+                       "the horizon may differ)")
+    disc = bool(getattr(node, "sun_disc", True)) and sky == 2
+    direction = tuple(float(c) for c in _prop(node, ("sun_direction",), (0.0, 0.0, 1.0)))
+    settings = list(direction[:3]) + [
+        float(_prop(node, ("turbidity",), 2.2)),
+        float(_prop(node, ("ground_albedo",), 0.3)),
+        float(_prop(node, ("sun_size",), 0.545 * math.pi / 180.0)),
+        float(_prop(node, ("sun_intensity",), 1.0)),
+        float(_prop(node, ("sun_elevation",), 15.0 * math.pi / 180.0)),
+        float(_prop(node, ("sun_rotation",), 0.0)),
+        float(_prop(node, ("altitude",), 0.0)),
+        float(_prop(node, ("air_density",), 1.0)),
+        float(_prop(node, ("dust_density", "aerosol_density"), 1.0)),
+        float(_prop(node, ("ozone_density",), 1.0)),
+    ]
+    settings = [_finite(v, 0.0) for v in settings]
+    # With Nishita's sun disc Blender makes the Vector socket unavailable and Cycles ignores its link: the
+    # default, Generated coordinates (the direction, in a world), is used.
+    socket = _socket(node.inputs, "Vector")
+    if socket is not None and not getattr(socket, "enabled", True):
+        vector = _texco_default(b, "generated")
+    else:
+        vector = _vector_input(b, node, stack)
+    regs = b.emit("sky_texture", [sky, int(disc), b.table(settings), -1], [vector])
+    return {"Color": regs[0]}
+
+
 def _n_math(b, node, stack):
     op = node.operation
     if op == "FLOORED_MODULO":
@@ -1128,6 +1186,7 @@ NODES = {
     "ShaderNodeTexChecker": _n_checker,
     "ShaderNodeTexGradient": _n_gradient,
     "ShaderNodeTexWhiteNoise": _n_white_noise,
+    "ShaderNodeTexSky": _n_sky_texture,
     "ShaderNodeMath": _n_math,
     "ShaderNodeVectorMath": _n_vector_math,
     "ShaderNodeMapRange": _n_map_range,

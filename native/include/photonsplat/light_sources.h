@@ -47,6 +47,12 @@ public:
     // cosine-weighted about n, a programmed one by its map (and portals).
     LightIncidence sample_incidence(size_t i, const glm::vec3& x, const glm::vec3& n, float u1, float u2,
                                     float u3) const;
+    // What the camera sees (a sphere, render space): a programmed world sends half of its disc photons through
+    // it (world.h). Radius 0: none.
+    void set_focus(const glm::vec3& center, float radius) {
+        focus_center_ = center;
+        focus_radius_ = radius;
+    }
     // A photon's starting ray and power. u1..u5 in [0, 1).
     EmissionSample sample_emission(size_t i, float u1, float u2, float u3, float u4, float u5) const;
 
@@ -62,6 +68,8 @@ private:
     std::shared_ptr<const WorldLight> world_;
     glm::vec3 center_;
     float radius_;  // of the scene's bounding sphere
+    glm::vec3 focus_center_{0.0f};
+    float focus_radius_ = 0.0f;
     std::vector<Source> sources_;
     // Emissive triangles of every instance (an instanced emissive mesh lights the scene once per copy), chosen
     // in proportion to world-space area × luminance of their emission.

@@ -255,7 +255,8 @@ private:
 };
 
 // Records the scene's size in stats (counters "triangles", "dropped_triangles", "lights") and the bytes of its
-// ray tracer, building the tracer first if no render has yet (timed as the stage "scene_build").
+// ray tracer, building the tracer first if no render has yet (timed as the stage "scene_build"), and the
+// world's importance map, baking it first if the world changed (the stage "world_map").
 void report_scene(const Scene& scene, Stats& stats);
 
 }  // namespace ps

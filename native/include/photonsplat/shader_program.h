@@ -126,7 +126,14 @@ namespace ps {
     X(mapping,           1, "vvvv",   "v")   /* params: type (0 point, 1 texture, 2 vector, 3 normal); vector,  */ \
                                              /* location, rotation (euler XYZ), scale */                           \
     X(vector_rotate,     2, "vvvfv",  "v")   /* params: type (0 axis, 1 x, 2 y, 3 z, 4 euler xyz), invert;       */ \
-                                             /* vector, center, axis, angle, rotation */
+                                             /* vector, center, axis, angle, rotation */                           \
+    /* --- the sky (nodes/sky_texture.cpp; last, so that the ids of the ops above stay as they were) --- */     \
+    /* params: sky type (0 Preetham, 1 Hosek / Wilkie: evaluated as Preetham, 2 Nishita), sun disc (0, 1),     */ \
+    /* settings (tables offset of kSkySettingsFloats: sun direction xyz, turbidity, ground albedo, sun size,     */ \
+    /* sun intensity, sun elevation, sun rotation, altitude, air, dust, ozone density), precomputed (tables     */ \
+    /* offset of the sky's precomputed data, -1: finalize_program computes it, nodes/sky_texture.h); vector;    */ \
+    /* color */                                                                                                   \
+    X(sky_texture,       4, "v",      "v")
 // clang-format on
 
 enum class ShaderOp : int32_t {

@@ -13,9 +13,12 @@
 // area lights marked as portals) are sampled beside the map, half and half, as Cycles 3.4 does, by the point
 // on the portal's rectangle; their density is the mean over the portals a direction passes through.
 //
-// Photons: from a disc covering the scene's bounding sphere, perpendicular to a direction drawn from the map
-// (a sun in the sky sends most of the photons, from its own direction), or, with portals, from a point on a
-// portal into the room, along a direction drawn from the map.
+// Photons: along a direction drawn from the map (a sun in the sky sends most of the photons, from its own
+// direction), from a disc perpendicular to it: half of them from the disc covering the scene's bounding sphere,
+// half from the one covering what the camera sees (a large ground plane would take most photons far from the
+// view), each weighted by the mixture's density. With portals most of them start on a portal instead, into the
+// room (if nothing outside blocks the way to the sky), and the disc photons that would enter through a portal
+// are dropped, so that no path counts twice and light through openings without a portal still arrives.
 #pragma once
 #include <memory>
 #include <string>
@@ -70,8 +73,9 @@ public:
     // A programmed world places the photon with u1, u2 (on the disc or the portal; what an EmissionGuide
     // redistributes) and draws its direction from the map with u3, u4; a constant one draws the direction
     // uniformly with u1, u2 and the disc point with u3, u4.
-    EmissionSample sample_emission(const glm::vec3& center, float radius, float u1, float u2, float u3, float u4,
-                                   float u5) const;
+    // focus (radius > 0): the sphere around what the camera sees; half of the disc photons are sent through it.
+    EmissionSample sample_emission(const glm::vec3& center, float radius, const glm::vec3& focus_center,
+                                   float focus_radius, float u1, float u2, float u3, float u4, float u5) const;
 
 private:
     const Scene& scene_;

@@ -9,6 +9,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/scene.h"
 #include "nodes/color_math.h"
+#include "nodes/sky_texture.h"
 #include "shader/op_args.h"
 
 namespace ps {
@@ -104,6 +105,7 @@ void run_instruction(const Decoded& d, const ShaderProgram& p, const Scene& scen
     if (run_shading_point_op(d.op, a, tables, scene, g)) return;
     if (run_image_op(d.op, a, scene, g)) return;
     if (run_texture_op(d.op, a, tables)) return;
+    if (run_sky_op(d.op, a, tables)) return;
     run_converter_op(d.op, a, tables);
 }
 
@@ -182,6 +184,10 @@ void validate(const ShaderProgram& p, int closure_count, const std::string& wher
                 tables_ok = d.params[1] >= 1 && table_fits(d.params[0], 2 + int64_t(d.params[1]) * 3);
                 break;
             case ShaderOp::float_curve: tables_ok = d.params[1] >= 1 && table_fits(d.params[0], 2 + int64_t(d.params[1])); break;
+            case ShaderOp::sky_texture:
+                tables_ok = table_fits(d.params[2], kSkySettingsFloats) &&
+                            (d.params[3] == -1 || table_fits(d.params[3], sky_precomputed_floats(d.params[0])));
+                break;
             default: break;
         }
         if (!tables_ok) throw InvalidInput(at, std::string(info.name) + " reads beyond the program's tables");
@@ -212,6 +218,36 @@ void finalize_program(ShaderProgram& p, const Scene& scene) {
                 throw InvalidInput("program." + std::string(shader_op_info(d.op).name) + ".texture",
                                    "is " + std::to_string(t) + ", but the scene has " +
                                        std::to_string(scene.textures().size()) + " textures");
+        }
+        pc = d.next;
+    }
+
+    // Sky textures: what Cycles precomputes per node on the host, computed here once per program (a program
+    // naming the same sky twice shares one copy) into its tables, where the op's last param then points.
+    std::vector<std::pair<std::vector<int32_t>, int32_t>> skies;  // (type, disc, settings bits) → offset
+    for (size_t pc = 0; pc < p.code.size();) {
+        const Decoded d = decode(p.code, pc);
+        if (d.op == ShaderOp::sky_texture && d.params[3] == -1 && sky_precomputed_floats(d.params[0]) > 0 &&
+            d.params[2] >= 0 && static_cast<size_t>(d.params[2]) + kSkySettingsFloats <= p.tables.size()) {
+            std::vector<int32_t> key{d.params[0], d.params[1] != 0};
+            float settings[kSkySettingsFloats];
+            for (int i = 0; i < kSkySettingsFloats; ++i) {
+                settings[i] = p.tables[static_cast<size_t>(d.params[2]) + i];
+                int32_t bits;
+                std::memcpy(&bits, &settings[i], sizeof bits);
+                key.push_back(bits);
+            }
+            int32_t offset = -1;
+            for (const auto& sky : skies)
+                if (sky.first == key) offset = sky.second;
+            if (offset < 0) {
+                if (p.tables.size() + static_cast<size_t>(sky_precomputed_floats(d.params[0])) > kMaxTableFloats)
+                    throw InvalidInput("program.sky_texture", "too many different skies in one program");
+                offset = static_cast<int32_t>(p.tables.size());
+                precompute_sky(d.params[0], d.params[1] != 0, settings, p.tables);
+                skies.emplace_back(std::move(key), offset);
+            }
+            p.code[pc + 4 + 3] = offset;
         }
         pc = d.next;
     }
