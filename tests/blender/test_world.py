@@ -663,9 +663,6 @@ def test_hdri_file_reaches_the_core_as_blender_reads_it(empty_scene, core, tmp_p
     sync = real_sync(core)
     radiance = sync.scene.world_radiance((0.0, 0.0, 1.0), camera=True)
     print(f"\n{loaded.colorspace_settings.name}: Blender's texel {texels[:3]}, the core's {radiance}; {sync.notes}")
-    if loaded.colorspace_settings.name == "Linear Rec.709":
-        # Blender 4.x's name of scene-linear, not in textures.py's _LINEAR_SPACES: the file is decoded as sRGB.
-        pytest.xfail("textures.py does not know the colour space 'Linear Rec.709' (decodes the file as sRGB)")
     assert not [n for n in sync.notes if n.startswith("World")], sync.notes
     assert radiance == pytest.approx(tuple(texels[:3]), rel=1e-4)
 

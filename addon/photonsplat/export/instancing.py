@@ -251,12 +251,17 @@ class MaterialTable:
     def _texture_index(self, spec, reference):
         """Core index of the image of `reference` (added once per image), a texture of the material `spec`; a
         failure to read it becomes a note and the closure keeps a plain colour (index -1)."""
+        return self.texture_index(reference, lambda error: self._notes.append(
+            f"Material '{spec.name}': image '{reference.image.name}' not readable ({error}); its colour is used"))
+
+    def texture_index(self, reference, on_error):
+        """Core index of the image of `reference` in the scene's one texture table, added on first use (the
+        materials' and the world's images alike); an unreadable image calls on_error(error) once and is -1."""
         if reference.key not in self._textures:
             try:
                 self._textures[reference.key] = textures.add_texture(self._core_scene, reference)
             except (ValueError, RuntimeError) as error:
-                self._notes.append(f"Material '{spec.name}': image '{reference.image.name}' not readable "
-                                   f"({error}); its colour is used")
+                on_error(error)
                 self._textures[reference.key] = -1
         return self._textures[reference.key]
 

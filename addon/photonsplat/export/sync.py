@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import settings as settings_table
-from . import camera, lights, mesh, textures, world
+from . import camera, lights, mesh, world
 from .instancing import GeometryTable, MaterialTable, instance_name, mesh_needs, placement, unique
 
 # Notes beyond this many are summarised in one line: a scene with 500 odd materials should not bury the report.
@@ -326,15 +326,8 @@ class BlenderSync:
     def _world_texture(self, build, reference):
         """Core index of the world's image of `reference`, in the scene's one texture table (the materials'): an
         image the materials use too is not added again. An unreadable image is a note and renders magenta."""
-        table = build.materials._textures
-        if reference.key not in table:
-            try:
-                table[reference.key] = textures.add_texture(build.scene, reference)
-            except (ValueError, RuntimeError) as error:
-                self._world_notes.append(f"World '{self._world.name}': image '{reference.image.name}' not "
-                                         f"readable ({error}); rendered magenta")
-                table[reference.key] = -1
-        return table[reference.key]
+        return build.materials.texture_index(reference, lambda error: self._world_notes.append(
+            f"World '{self._world.name}': image '{reference.image.name}' not readable ({error}); rendered magenta"))
 
     def _current_notes(self):
         notes = self._build.material_notes + self._light_notes + self._object_notes + self._world_notes

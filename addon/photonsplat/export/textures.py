@@ -22,7 +22,9 @@ import numpy as np
 MISSING_IMAGE_COLOR = (1.0, 0.0, 1.0)
 
 # Blender colour spaces whose data is used unchanged (scene-linear or non-colour data).
-_LINEAR_SPACES = {"Linear", "Non-Color", "Raw", "Linear ACES", "Linear ACEScg", "XYZ", "scene_linear"}
+# Blender 3.x calls scene-linear Rec.709 "Linear", 4.x "Linear Rec.709".
+_LINEAR_SPACES = {"Linear", "Linear Rec.709", "Non-Color", "Raw", "Linear ACES", "Linear ACEScg", "XYZ",
+                  "scene_linear"}
 
 
 @dataclass
