@@ -535,7 +535,8 @@ def write_markdown(results, args, path):
     for label, row in results["scenes"].items():
         for e in row["photonsplat"]:
             add(f"| {label} | {e['seconds']:.1f} s | {e['block_relmse']:.4f} ({e['iterations']}) | {e['ratio']:.3f} | "
-                f"{at_time(e['cycles_at_time'], row)} ({fmt(e['cycles_samples_at_time'], '.0f')}) | "
+                f"{at_time(e['cycles_at_time'], row)} "
+                f"({fmt(e['cycles_samples_at_time'] if e['cycles_at_time'] is not None else None, '.0f')}) | "
                 f"{row['cycles']['block_floor']:.5f} |")
     add("")
     add("Cycles' series (seeds 101, 102, ...; each render timed from the call to its end):")
