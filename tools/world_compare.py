@@ -80,6 +80,8 @@ def parse_args(argv):
     parser.add_argument("--photons", type=int, help="Photon Splat photons per iteration (default 200000, quick "
                         "50000)")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--report-only", action="store_true",
+                        help="rewrite the markdown and the contact sheet from build/world_compare/ (no rendering)")
     parser.add_argument("--markdown", default=str(RESULTS_MD))
     parser.add_argument("--png", default=str(RESULTS_PNG))
     parser.add_argument("--blender", default="blender")
@@ -101,6 +103,9 @@ def command_line(argv):
 
 def run_in_blender(argv):
     args = parse_args(argv)
+    if args.report_only:
+        report_only(args)
+        return
     env = dict(os.environ)
     command = [args.blender, "-b", "--factory-startup", "-noaudio"]
     if not args.cycles_only:
@@ -359,7 +364,8 @@ def blender_main(argv):
                 return series
             samples *= 2
 
-    results = {"scenes": {}, "args": {k: v for k, v in vars(args).items()}, "command": command_line(argv)}
+    results = {"scenes": {}, "args": {k: v for k, v in vars(args).items()}, "command": command_line(argv),
+               "load_start": os.getloadavg()[0]}
     sheet = []
     started = time.time()
     for label in args.scenes:
@@ -447,9 +453,11 @@ def blender_main(argv):
                             caustics_ours=last["passes"].get("caustics", np.zeros_like(cyc)))
         # the contact sheet: Cycles | Photon Splat | Cycles direct | Photon Splat direct (display: exposure of file)
         gain = 2.0 ** scene.view_settings.exposure
+        row["display_gain"] = gain
         sheet.append([display(im * gain) for im in (cyc, last["image"], direct_ref,
                                                     last["passes"].get("direct", last["image"]))])
 
+    results["load_end"] = os.getloadavg()[0]
     results["seconds"] = time.time() - started
     results["commit"] = commit_of_repo()
     results["date"] = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -462,6 +470,24 @@ def blender_main(argv):
     if sheet:
         write_sheet(sheet, Path(args.png), np)
     print(f"world_compare: wrote {args.markdown} and {args.png} ({results['seconds']:.0f} s)")
+
+
+def report_only(args):
+    """The markdown and the contact sheet again, from the last run's results.json and images (numpy only)."""
+    import numpy as np
+    results = json.loads((OUT_DIR / "results.json").read_text())
+    saved = argparse.Namespace(**results["args"])
+    write_markdown(results, saved, Path(args.markdown))
+    sheet = []
+    for label, row in results["scenes"].items():
+        path = OUT_DIR / "images" / f"{label}.npz"
+        if path.exists():
+            data = np.load(path)
+            gain = row.get("display_gain", 1.0)
+            sheet.append([display(data[k] * gain) for k in ("cycles", "ours", "direct_cycles", "direct_ours")])
+    if sheet:
+        write_sheet(sheet, Path(args.png), np)
+    print(f"world_compare: wrote {args.markdown} and {args.png} from {OUT_DIR / 'results.json'}")
 
 
 def write_sheet(rows, path, np):
@@ -482,13 +508,15 @@ def fmt(value, spec, none="–"):
     return none if value is None else format(value, spec)
 
 
-def at_time(value, row):
+def at_time(value, row, reached=None):
     """A Cycles error interpolated at a Photon Splat time, or why there is none."""
     if value is not None:
         return f"{value:.4f}"
     series = row["cycles_series"]
+    if series and reached is not None and reached > series[-1]["samples"]:
+        return "past Cycles' series"
     if series:
-        return f"no image yet (1 sample took {series[0]['seconds']:.1f} s)"
+        return f"under 1 sample by the line through its times (1 spp took {series[0]['seconds']:.1f} s)"
     return "–"
 
 
@@ -498,8 +526,11 @@ def write_markdown(results, args, path):
     quick = " (quick smoke run: half size, few samples; not the acceptance figures)" if args.quick else ""
     add("# The world as a light: HDRI, sky and portal scenes against Cycles")
     add("")
+    load = ""
+    if "load_start" in results:
+        load = f" (load average {results['load_start']:.1f} at the start, {results['load_end']:.1f} at the end)"
     add(f"Issue 17's acceptance. Measured {results['date']} at {results['commit']} with Blender "
-        f"{results['blender']} on a {os.cpu_count()}-core machine, {args.threads} threads for both renderers"
+        f"{results['blender']} on a {os.cpu_count()}-core machine{load}, {args.threads} threads for both renderers"
         f"{quick}:")
     add("")
     add("    " + results["command"])
@@ -535,7 +566,7 @@ def write_markdown(results, args, path):
     for label, row in results["scenes"].items():
         for e in row["photonsplat"]:
             add(f"| {label} | {e['seconds']:.1f} s | {e['block_relmse']:.4f} ({e['iterations']}) | {e['ratio']:.3f} | "
-                f"{at_time(e['cycles_at_time'], row)} "
+                f"{at_time(e['cycles_at_time'], row, e['cycles_samples_at_time'])} "
                 f"({fmt(e['cycles_samples_at_time'] if e['cycles_at_time'] is not None else None, '.0f')}) | "
                 f"{row['cycles']['block_floor']:.5f} |")
     add("")
@@ -562,8 +593,8 @@ def write_markdown(results, args, path):
             ok = (e["direct_relmse"] is not None and e["cycles_direct_at_time"] is not None
                   and e["direct_relmse"] <= e["cycles_direct_at_time"])
             add(f"| {label} | {row['direct_blocks']} | {e['seconds']:.1f} s | {fmt(e['direct_relmse'], '.4f')} | "
-                f"{at_time(e['cycles_direct_at_time'], row)} | {row['direct_floor']:.5f} | "
-                f"{'yes' if ok else '**no**'} |")
+                f"{at_time(e['cycles_direct_at_time'], row, e['cycles_samples_at_time'])} | "
+                f"{row['direct_floor']:.5f} | {'yes' if ok else '**no**'} |")
     add("")
     if "hdri" in results["scenes"] and "caustic" in results["scenes"]["hdri"]:
         row = results["scenes"]["hdri"]
@@ -573,10 +604,9 @@ def write_markdown(results, args, path):
         add(f"Region: {c['region_blocks']} blocks of 8×8 ({c['region_pixels']} pixels) where rays parallel to the "
             f"HDRI's sun direction, refracted through the glass sphere, land on the floor in view, grown by one "
             f"block (opaque blocks only). Cycles' caustic there: its image with refractive caustics minus without. "
-            f"Energy: sum "
-            f"over the region of the mean of R, G, B. Cycles: on {c['cycles_on_region']:.2f}, off "
-            f"{c['cycles_off_region']:.2f}, caustic **{c['cycles_energy']:.2f}** (noise ±{c['cycles_energy_noise']:.1%}"
-            f", from the two seeds).")
+            f"Energy: sum over the region of the mean of R, G, B. Cycles: on {c['cycles_on_region']:.2f}, off "
+            f"{c['cycles_off_region']:.2f}, caustic **{c['cycles_energy']:.2f}** "
+            f"(noise ±{c['cycles_energy_noise']:.1%}, from the two seeds).")
         add("")
         add("| time | Photon Splat Caustics pass | ratio | Photon Splat combined − Cycles off | pass |")
         add("|---|---|---|---|---|")

@@ -4,9 +4,9 @@ the whole-image mean must agree within MEAN_TOLERANCE.
 
 96 x 54 pixels (the file's 16:9 at 20 %). Cycles: 128 samples, no denoising, adaptive sampling or clamping, box
 filter 1 px, 16 bounces; its own noise on the mean at this size is 0.8 % (one standard deviation over seeds 1-6:
-means 0.864-0.881), caustic fireflies included. Photon Splat: 8 iterations of 50k photons. The tolerance, 5 %, is the issue's 3 %
-(tools/world_compare.py, docs/results/worlds.md, at full size and converged) plus room for both renderers' noise
-at this size: an engine that lights the scene by its world as Cycles does meets it.
+means 0.864-0.881), caustic fireflies included. Photon Splat: 8 iterations of 50k photons. The tolerance, 5 %, is
+the issue's 3 % (tools/world_compare.py, docs/results/worlds.md, at full size and converged) plus room for both
+renderers' noise at this size: an engine that lights the scene by its world as Cycles does meets it.
 
 EXPECTED TO FAIL until issue 17 lands: today's engine lights the scene with a constant world colour (the
 Environment Texture is replaced by its socket's unconnected value; Photon Splat's mean is about 4 % of Cycles').
