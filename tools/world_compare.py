@@ -521,10 +521,17 @@ def fmt(value, spec, none="–"):
     return none if value is None else format(value, spec)
 
 
+def err(value):
+    """An error figure: 4 decimals, or 2 significant digits when that would show zeros."""
+    if value is None:
+        return "–"
+    return f"{value:.4f}" if abs(value) >= 1e-3 or value == 0 else f"{value:.1e}"
+
+
 def at_time(value, row, reached=None):
     """A Cycles error interpolated at a Photon Splat time, or why there is none."""
     if value is not None:
-        return f"{value:.4f}"
+        return err(value)
     series = row["cycles_series"]
     if series and reached is not None and reached > series[-1]["samples"]:
         return "past Cycles' series"
@@ -556,6 +563,10 @@ def write_markdown(results, args, path):
         "given beside each figure (mean: |m1 − m2| / (m1 + m2); block error: relMSE(seed 1, seed 2) / 4); errors "
         "are 8×8-block relMSE against it; times are wall seconds of the whole render (export / sync included).")
     add("")
+    if args.quick:
+        add(f"In a quick run Cycles' converged image has only {args.cycles_samples} samples: errors against it, "
+            "Cycles' own above all, say little; the run shows that the tool works.")
+        add("")
     add("Results images: `docs/results/worlds.png`, a row per scene: Cycles converged | Photon Splat at the longest "
         "time | Cycles direct light | Photon Splat's Direct pass (display at each file's exposure).")
     add("")
@@ -584,11 +595,11 @@ def write_markdown(results, args, path):
         for e in row["photonsplat"]:
             cycles = at_time(e["cycles_at_time"], row, e["cycles_samples_at_time"])
             if e["cycles_at_time"] is not None:
-                cycles += (f" [{fmt(e.get('cycles_trimmed_at_time'), '.4f')}] "
+                cycles += (f" [{err(e.get('cycles_trimmed_at_time'))}] "
                            f"({e['cycles_samples_at_time']:.0f})")
-            add(f"| {label} | {e['seconds']:.1f} s | {e['block_relmse']:.4f} [{fmt(e.get('trimmed_relmse'), '.4f')}] "
-                f"({e['iterations']}) | {e['ratio']:.3f} | {cycles} | {row['cycles']['block_floor']:.5f} "
-                f"[{fmt(row['cycles'].get('block_floor_trimmed'), '.5f')}] |")
+            add(f"| {label} | {e['seconds']:.1f} s | {err(e['block_relmse'])} [{err(e.get('trimmed_relmse'))}] "
+                f"({e['iterations']}) | {e['ratio']:.3f} | {cycles} | {err(row['cycles']['block_floor'])} "
+                f"[{err(row['cycles'].get('block_floor_trimmed'))}] |")
     add("")
     add("Cycles' series (seeds 101, 102, ...; each render timed from the call to its end):")
     add("")
@@ -598,7 +609,7 @@ def write_markdown(results, args, path):
     for label, row in results["scenes"].items():
         for s in row["cycles_series"]:
             add(f"| {label} | {s['samples']} | {s['seconds']:.1f} | {s['mean'] / row['cycles']['mean']:.3f} | "
-                f"{s['block_relmse']:.4f} [{fmt(s.get('trimmed_relmse'), '.4f')}] | {s['direct_relmse']:.4f} |")
+                f"{err(s['block_relmse'])} [{err(s.get('trimmed_relmse'))}] | {err(s['direct_relmse'])} |")
     add("")
     add("## Direct light at equal time (acceptance: the HDRI scene's Photon Splat error no worse than Cycles')")
     add("")
@@ -613,9 +624,9 @@ def write_markdown(results, args, path):
         for e in row["photonsplat"]:
             ok = (e["direct_relmse"] is not None and e["cycles_direct_at_time"] is not None
                   and e["direct_relmse"] <= e["cycles_direct_at_time"])
-            add(f"| {label} | {row['direct_blocks']} | {e['seconds']:.1f} s | {fmt(e['direct_relmse'], '.4f')} | "
+            add(f"| {label} | {row['direct_blocks']} | {e['seconds']:.1f} s | {err(e['direct_relmse'])} | "
                 f"{at_time(e['cycles_direct_at_time'], row, e['cycles_samples_at_time'])} | "
-                f"{row['direct_floor']:.5f} | {'yes' if ok else '**no**'} |")
+                f"{err(row['direct_floor'])} | {'yes' if ok else '**no**'} |")
     add("")
     if "hdri" in results["scenes"] and "caustic" in results["scenes"]["hdri"]:
         row = results["scenes"]["hdri"]
