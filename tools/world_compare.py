@@ -490,6 +490,8 @@ def report_only(args):
     import numpy as np
     results = json.loads((OUT_DIR / "results.json").read_text())
     saved = argparse.Namespace(**results["args"])
+    if saved.cycles_only:
+        sys.exit(f"world_compare: {OUT_DIR / 'results.json'} is from a --cycles-only run: nothing to report")
     write_markdown(results, saved, Path(args.markdown))
     sheet = []
     for label, row in results["scenes"].items():
