@@ -12,6 +12,7 @@
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/shader_program.h"
 #include "photonsplat/validation.h"
+#include "nodes/sky_texture.h"
 
 namespace ps {
 
@@ -44,6 +45,42 @@ int environment_image_width(const Scene& scene, const ShaderProgram& p) {
         at += 4 + static_cast<size_t>(n_params + n_in + n_out);
     }
     return width;
+}
+
+// The sun disc of the program's first Nishita Sky Texture that draws one: its direction (towards it) and
+// angular radius. Cycles ignores a Nishita sky's Vector when its disc is on, so the direction is the node's own.
+bool nishita_sun(const ShaderProgram& p, glm::vec3& direction, float& half_angle) {
+    for (size_t at = 0; at + 4 <= p.code.size();) {
+        const int op = p.code[at], n_params = p.code[at + 1], n_in = p.code[at + 2], n_out = p.code[at + 3];
+        if (op == static_cast<int>(ShaderOp::sky_texture) && n_params >= 4 && p.code[at + 4] == kSkyNishita &&
+            p.code[at + 5] == 1) {
+            const int32_t offset = p.code[at + 7];
+            if (offset >= 0 && size_t(offset) + kNishitaHeaderFloats <= p.tables.size()) {
+                const float* d = p.tables.data() + offset;
+                const float elevation = d[6], rotation = d[7], size = d[8];
+                if (size > 0.0f && std::isfinite(elevation) && std::isfinite(rotation) && std::isfinite(size)) {
+                    const float azimuth = rotation + 0.5f * kPi;
+                    direction = glm::vec3(std::cos(elevation) * std::cos(azimuth),
+                                          std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
+                    half_angle = 0.5f * size;
+                    return true;
+                }
+            }
+        }
+        at += 4 + static_cast<size_t>(n_params + n_in + n_out);
+    }
+    return false;
+}
+
+// A direction uniformly inside the cone of half-angle α about `axis`; 1 − cos α as 2 sin²(α/2), exact for the
+// sun's quarter of a degree.
+glm::vec3 sample_cone(const glm::vec3& axis, double one_minus_cos, float u1, float u2) {
+    const double c = 1.0 - double(u1) * one_minus_cos;
+    const double s = std::sqrt(std::max(0.0, double(u1) * one_minus_cos * (2.0 - double(u1) * one_minus_cos)));
+    glm::vec3 b1, b2;
+    orthonormal_basis(axis, b1, b2);
+    const double phi = 2.0 * kPi * double(u2);
+    return glm::normalize(float(s * std::cos(phi)) * b1 + float(s * std::sin(phi)) * b2 + float(c) * axis);
 }
 
 }  // namespace
@@ -149,6 +186,22 @@ WorldLight::WorldLight(const Scene& scene) : scene_(scene), background_(scene.ba
     }
     integral_ = glm::vec3(integral);
     map_ = std::make_unique<EnvironmentDistribution>(width, height, std::move(rgb));
+    // A Nishita sun disc gets its own sampling (Cycles' background sun), for light samples and photons.
+    if (program && nishita_sun(*program, sun_axis_, sun_half_angle_)) {
+        const double s = std::sin(0.5 * double(sun_half_angle_));
+        sun_one_minus_cos_ = 2.0 * s * s;
+        glm::dvec3 sum(0.0);
+        constexpr int n = 16;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                sum += glm::dvec3(world_radiance(
+                    scene, sample_cone(sun_axis_, sun_one_minus_cos_, (float(i) + 0.5f) / n, (float(j) + 0.5f) / n),
+                    ShaderRay::shadow));
+        const glm::vec3 sun_integral = glm::vec3(sum / double(n * n) * (2.0 * kPi * sun_one_minus_cos_));
+        has_sun_ = lum(sun_integral) > 0.0f;
+        if (has_sun_)
+            sun_photon_share_ = std::clamp(lum(sun_integral) / std::max(lum(integral_), 1e-30f), 0.05f, 0.95f);
+    }
     double total = 0.0;
     for (size_t k = 0; k < portals_.size(); ++k) {
         portals_[k].flux = glm::vec3(portal_flux[k]);
@@ -226,13 +279,12 @@ LightIncidence WorldLight::sample_incidence(const glm::vec3& x, const glm::vec3&
         out.pdf = cos_n > 1e-6f ? cos_n / kPi : 0.0f;
         return out;
     }
-    // Portals and the map, half and half where both can light x (Cycles 3.4's method weights).
-    const int possible = possible_portals(x);
-    const bool use_map = map_ != nullptr && !map_->is_zero();
-    const float p_portal = possible > 0 ? (use_map ? 0.5f : 1.0f) : 0.0f;
-    if (p_portal > 0.0f && u3 < p_portal) {
+    // Portals, the sun and the map, weighted 1 : 4 : 1 where each can light x (Cycles 3.4's method weights).
+    const int possible = portals_.empty() ? 0 : possible_portals(x);
+    const Methods m = methods(possible);
+    if (m.portal > 0.0f && u3 < m.portal) {
         // One of the possible portals, uniformly, then a uniform point on it.
-        int pick = std::min(int(u3 / p_portal * float(possible)), possible - 1);
+        int pick = std::min(int(u3 / m.portal * float(possible)), possible - 1);
         const Rect* chosen = nullptr;
         for (const Rect& r : portals_)
             if (glm::dot(x - r.corner, r.normal) > 0.0f && pick-- == 0) {
@@ -245,7 +297,9 @@ LightIncidence WorldLight::sample_incidence(const glm::vec3& x, const glm::vec3&
         const float len = glm::length(to);
         if (!(len > 0.0f)) return out;
         out.wi = to / len;
-    } else if (use_map) {
+    } else if (m.sun > 0.0f && u3 < m.portal + m.sun) {
+        out.wi = sample_cone(sun_axis_, sun_one_minus_cos_, u1, u2);
+    } else if (m.map > 0.0f) {
         const EnvironmentSample s = map_->sample(u1, u2);
         if (!(s.pdf > 0.0f)) return out;
         out.wi = s.direction;
@@ -261,6 +315,30 @@ LightIncidence WorldLight::sample_incidence(const glm::vec3& x, const glm::vec3&
     return out;
 }
 
+WorldLight::Methods WorldLight::methods(int possible_portals) const {
+    Methods m;
+    m.portal = possible_portals > 0 ? 1.0f : 0.0f;
+    m.sun = has_sun_ ? 4.0f : 0.0f;
+    m.map = map_ != nullptr && !map_->is_zero() ? 1.0f : 0.0f;
+    const float total = m.portal + m.sun + m.map;
+    if (total > 0.0f) {
+        m.portal /= total;
+        m.sun /= total;
+        m.map /= total;
+    }
+    return m;
+}
+
+float WorldLight::sun_pdf(const glm::vec3& wi) const {
+    if (!has_sun_) return 0.0f;
+    // 1 − cos θ = |wi − axis|² / 2 for unit vectors: exact where 1 − dot would lose the quarter-degree cone to
+    // float rounding (a cone sample then weighed as the map's alone is a firefly). A sliver of tolerance keeps
+    // the cone's own samples at its edge inside it.
+    const glm::vec3 chord = wi - sun_axis_;
+    const double one_minus_cos = 0.5 * double(glm::dot(chord, chord));
+    return one_minus_cos <= sun_one_minus_cos_ * (1.0 + 1e-4) ? float(1.0 / (2.0 * kPi * sun_one_minus_cos_)) : 0.0f;
+}
+
 float WorldLight::pdf(const glm::vec3& x, const glm::vec3& n, const glm::vec3& wi) const {
     if (constant_) {
         const float cos_n = glm::dot(wi, n);
@@ -268,9 +346,8 @@ float WorldLight::pdf(const glm::vec3& x, const glm::vec3& n, const glm::vec3& w
     }
     int possible = 0;
     const float portal = portals_.empty() ? 0.0f : portal_pdf(x, wi, possible);
-    const bool use_map = map_ != nullptr && !map_->is_zero();
-    if (possible == 0) return use_map ? map_pdf(wi) : 0.0f;
-    return use_map ? 0.5f * (portal + map_pdf(wi)) : portal;
+    const Methods m = methods(possible);
+    return m.portal * portal + m.sun * sun_pdf(wi) + m.map * map_pdf(wi);
 }
 
 EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius, const glm::vec3& focus_center,
@@ -291,8 +368,18 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
         return out;
     }
     if (map_ == nullptr || map_->is_zero()) return out;
-    const EnvironmentSample s = map_->sample(u3, u4);
-    if (!(s.pdf > 0.0f)) return out;
+    // The direction: from the sun's cone with its share of the world's light, else from the map.
+    EnvironmentSample s;
+    if (has_sun_ && u3 < sun_photon_share_) {
+        s.direction = sample_cone(sun_axis_, sun_one_minus_cos_, u3 / sun_photon_share_, u4);
+    } else {
+        const float u = has_sun_ ? (u3 - sun_photon_share_) / (1.0f - sun_photon_share_) : u3;
+        s = map_->sample(std::min(u, std::nextafter(1.0f, 0.0f)), u4);
+        if (!(s.pdf > 0.0f)) return out;
+    }
+    s.pdf = has_sun_ ? sun_photon_share_ * sun_pdf(s.direction) + (1.0f - sun_photon_share_) * map_pdf(s.direction)
+                     : s.pdf;
+    if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) return out;
     out.direction = -s.direction;  // the photon travels away from where its light comes from
     const glm::vec3 L = world_radiance(scene_, s.direction, ShaderRay::shadow);
     const RayTracer* tracer = portal_cdf_.empty() ? nullptr : &scene_.ray_tracer();

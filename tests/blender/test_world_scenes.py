@@ -8,11 +8,9 @@ means 0.864-0.881), caustic fireflies included. Photon Splat: 8 iterations of 50
 the issue's 3 % (tools/world_compare.py, docs/results/worlds.md, at full size and converged) plus room for both
 renderers' noise at this size: an engine that lights the scene by its world as Cycles does meets it.
 
-EXPECTED TO FAIL until issue 17 lands: today's engine lights the scene with a constant world colour (the
-Environment Texture is replaced by its socket's unconnected value; Photon Splat's mean is about 4 % of Cycles').
-The test is marked xfail(strict=True), so it turns into a failure ("XPASS(strict)") the day the world becomes a
-real light: then delete the marker. Blender 3.4 only (Cycles' conventions of the other versions are measured
-elsewhere).
+Before issue 17 the engine lit this scene with a constant world colour (the Environment Texture replaced by its
+socket's unconnected value): about 4 % of Cycles' mean. Blender 3.4 only (Cycles' conventions of the other
+versions are measured elsewhere).
 """
 
 import time
@@ -76,7 +74,6 @@ def test_world_scenes_hold_what_the_acceptance_measures():
 
 
 @only_blender_34
-@pytest.mark.xfail(strict=True, reason="issue 17: world is a constant colour")
 def test_hdri_scene_mean_matches_cycles(tmp_path, core):
     scene = open_scene("world_hdri")
     started = time.perf_counter()

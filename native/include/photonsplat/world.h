@@ -10,8 +10,9 @@
 // 2 x 2 points per cell, so a sun smaller than a cell still weighs what it covers) whose piecewise-constant
 // distribution (environment_map.h) importance-samples directions; the radiance itself is always the program's
 // along the sampled direction, so the map only decides where rays go, never what they carry. Portals (Cycles'
-// area lights marked as portals) are sampled beside the map, half and half, as Cycles 3.4 does, by the point
-// on the portal's rectangle; their density is the mean over the portals a direction passes through.
+// area lights marked as portals) and a Nishita sky's sun disc (a uniform cone) are sampled beside the map, with
+// Cycles 3.4's method weights (portal 1, sun 4, map 1); a portal by a uniform point on its rectangle, its
+// density the mean over the portals a direction passes through.
 //
 // Photons: along a direction drawn from the map (a sun in the sky sends most of the photons, from its own
 // direction), from a disc perpendicular to it: half of them from the disc covering the scene's bounding sphere,
@@ -94,6 +95,19 @@ private:
     std::vector<float> portal_cdf_;  // by flux, for photons
     glm::vec3 portal_flux_{0.0f};
 
+    // A Nishita sky's sun disc (its own sampling, as Cycles' background sun).
+    bool has_sun_ = false;
+    glm::vec3 sun_axis_{0.0f, 0.0f, 1.0f};
+    float sun_half_angle_ = 0.0f;
+    double sun_one_minus_cos_ = 0.0;
+    float sun_photon_share_ = 0.0f;  // of the world's photons, by the disc's share of ∫ L dω
+
+    // The light-sampling methods' probabilities at a point: portals, sun, map (Cycles 3.4's weights 1, 4, 1).
+    struct Methods {
+        float portal = 0.0f, sun = 0.0f, map = 0.0f;
+    };
+    Methods methods(int possible_portals) const;
+    float sun_pdf(const glm::vec3& wi) const;
     float map_pdf(const glm::vec3& wi) const;
     float portal_pdf(const glm::vec3& x, const glm::vec3& wi, int& possible) const;
     int possible_portals(const glm::vec3& x) const;
