@@ -152,6 +152,30 @@ def display(image):
 
 # ---- inside Blender -------------------------------------------------------------------------------------------
 
+def use_cycles_oracle(scene, samples, seed, threads, bounces=BOUNCES):
+    """Cycles as every comparison here runs it, the oracle: CPU, `samples` at `seed`, no denoising, adaptive
+    sampling, clamping or light threshold, a 1 px box filter, `bounces` of every kind, no Filter Glossy (it blurs
+    caustics: a bias), `threads` threads. Returns scene.cycles for the caller's own settings."""
+    scene.render.engine = 'CYCLES'
+    c = scene.cycles
+    c.device = 'CPU'
+    c.samples = samples
+    c.seed = seed
+    c.use_denoising = False
+    c.use_adaptive_sampling = False
+    c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
+    c.light_sampling_threshold = 0.0
+    c.pixel_filter_type = 'BOX'
+    c.filter_width = 1.0
+    c.max_bounces = c.diffuse_bounces = c.glossy_bounces = bounces
+    c.transmission_bounces = c.transparent_max_bounces = bounces
+    c.volume_bounces = 0
+    c.blur_glossy = 0.0
+    scene.render.threads_mode = 'FIXED'
+    scene.render.threads = threads
+    return c
+
+
 def render_exr(scene, path):
     """Renders `scene` with bpy.ops into the OpenEXR `path` (deleted after): float32 (h, w, 4), row 0 at the top,
     as the core's images. Shared by the galleries and tools/node_compare.py."""
@@ -192,23 +216,7 @@ def blender_main(argv):
     timings = {"cycles": 0.0, "photonsplat": 0.0, "reference": 0.0, "cycles_cached": 0}
 
     def cycles_settings(scene, samples, seed):
-        scene.render.engine = 'CYCLES'
-        c = scene.cycles
-        c.device = 'CPU'
-        c.samples = samples
-        c.seed = seed
-        c.use_denoising = False
-        c.use_adaptive_sampling = False
-        c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-        c.light_sampling_threshold = 0.0
-        c.pixel_filter_type = 'BOX'
-        c.filter_width = 1.0
-        c.max_bounces = c.diffuse_bounces = c.glossy_bounces = BOUNCES
-        c.transmission_bounces = c.transparent_max_bounces = BOUNCES
-        c.volume_bounces = 0
-        c.blur_glossy = 0.0                      # Filter Glossy (default 1) blurs caustics: a bias
-        scene.render.threads_mode = 'FIXED'
-        scene.render.threads = args.threads
+        c = use_cycles_oracle(scene, samples, seed, args.threads)
         scene.render.film_transparent = False
         return {k: getattr(c, k) for k in ("samples", "light_sampling_threshold", "filter_width", "max_bounces",
                                            "caustics_reflective", "caustics_refractive", "blur_glossy")}

@@ -35,7 +35,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
-from closure_gallery import commit_of_repo, display, render_exr, write_png  # noqa: E402
+from closure_gallery import commit_of_repo, display, render_exr, use_cycles_oracle, write_png  # noqa: E402
 
 OUT_DIR = REPO / "build" / "texture_gallery"
 RESULTS_MD = REPO / "docs" / "results" / "texture_gallery.md"
@@ -129,23 +129,7 @@ def blender_main(argv):
     timings = {"cycles": 0.0, "photonsplat": 0.0, "cycles_cached": 0}
 
     def cycles_settings(scene, samples, seed):
-        scene.render.engine = 'CYCLES'
-        c = scene.cycles
-        c.device = 'CPU'
-        c.samples = samples
-        c.seed = seed
-        c.use_denoising = False
-        c.use_adaptive_sampling = False
-        c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-        c.light_sampling_threshold = 0.0
-        c.pixel_filter_type = 'BOX'
-        c.filter_width = 1.0
-        c.max_bounces = c.diffuse_bounces = c.glossy_bounces = BOUNCES
-        c.transmission_bounces = c.transparent_max_bounces = BOUNCES
-        c.volume_bounces = 0
-        c.blur_glossy = 0.0
-        scene.render.threads_mode = 'FIXED'
-        scene.render.threads = args.threads
+        c = use_cycles_oracle(scene, samples, seed, args.threads)
         scene.render.film_transparent = False
         return {k: getattr(c, k) for k in ("samples", "light_sampling_threshold", "filter_width", "max_bounces",
                                            "caustics_reflective", "caustics_refractive", "blur_glossy")}

@@ -51,7 +51,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
 sys.path.insert(0, str(REPO / "tests" / "blender"))     # scene_geometry: the glass sphere's caustic
-from closure_gallery import commit_of_repo, display, write_png  # noqa: E402
+from closure_gallery import commit_of_repo, display, use_cycles_oracle, write_png  # noqa: E402
 
 OUT_DIR = REPO / "build" / "world_compare"
 RESULTS_MD = REPO / "docs" / "results" / "worlds.md"
@@ -194,25 +194,9 @@ def blender_main(argv):
         core = load_core()
 
     def cycles_settings(scene, samples, seed, refractive_caustics=True):
-        scene.render.engine = 'CYCLES'
-        c = scene.cycles
-        c.device = 'CPU'
-        c.samples = samples
-        c.seed = seed
-        c.use_denoising = False
-        c.use_adaptive_sampling = False
-        c.sample_clamp_direct = c.sample_clamp_indirect = 0.0
-        c.light_sampling_threshold = 0.0
-        c.pixel_filter_type = 'BOX'
-        c.filter_width = 1.0
-        c.max_bounces = c.diffuse_bounces = c.glossy_bounces = BOUNCES
-        c.transmission_bounces = c.transparent_max_bounces = BOUNCES
-        c.volume_bounces = 0
-        c.blur_glossy = 0.0
+        c = use_cycles_oracle(scene, samples, seed, args.threads, BOUNCES)
         c.caustics_reflective = True
         c.caustics_refractive = refractive_caustics
-        scene.render.threads_mode = 'FIXED'
-        scene.render.threads = args.threads
         scene.render.film_transparent = False
         layer = bpy.context.view_layer
         layer.use_pass_z = True
