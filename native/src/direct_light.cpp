@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
@@ -16,6 +17,7 @@
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
+#include "photonsplat/sample_sequence.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/splat.h"
@@ -67,6 +69,8 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
 
 }  // namespace
 
+constexpr int kWorldSampleFactor = 2;
+
 float power_heuristic(float chosen, float other) {
     if (!(other > 0.0f)) return 1.0f;
     const float a = chosen * chosen, b = other * other;
@@ -105,7 +109,7 @@ glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, 
 }
 
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
-                          LobeSet set, Rng& rng, uint64_t& rays) {
+                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences) {
     const Scene& scene = c.scene;
     const LightSources& sources = c.sources;
     const int samples_per_light = c.samples_per_light;
@@ -119,16 +123,27 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     const bool world_constant = sources.world().constant();
     bool world_sampled = false;  // a programmed world among the sources: its BSDF directions always run
     for (size_t l = 0; l < sources.size(); ++l) world_sampled = world_sampled || (sources.is_world(l) && !world_constant);
+    // BSDF directions: as many as light samples where the BSDF has lobes (a highlight is theirs to find); on a
+    // Lambert surface only a programmed world needs them, for what its map under-weights, and one does: the map
+    // takes nearly all of a Lambert surface's light (a third less direct-light time under an HDRI).
+    const int probes = mis ? std::max(1, samples_per_light) : 1;
+    // A programmed world takes twice the light samples of a light: its map is what most surfaces see (an HDRI's
+    // sun, sky and ground at once) and a sample costs less than the photons' share of an iteration.
+    const int world_samples = kWorldSampleFactor * std::max(1, samples_per_light);
     for (size_t l = 0; l < sources.size(); ++l) {
         const bool delta = sources.is_delta(l);
         any_area = any_area || !delta;
-        const int n = delta ? 1 : samples_per_light;
+        const int n = delta ? 1 : (sources.is_world(l) && !world_constant ? world_samples : samples_per_light);
         const StrataGrid grid = strata_grid(n);
         glm::vec3 light_sum(0.0f);
+        const bool sequenced = sequences.light != nullptr && sources.is_world(l) && !world_constant;
         for (int k = 0; k < n; ++k) {
             float u1 = rng.uniform(), u2 = rng.uniform();
-            const float u3 = rng.uniform();
-            grid.place(k, u1, u2);
+            float u3 = rng.uniform();
+            if (sequenced)
+                sequences.light->point(sequences.iteration * uint32_t(n) + uint32_t(k), u1, u2, u3);
+            else
+                grid.place(k, u1, u2);
             const LightIncidence in = sources.sample_incidence(l, x, side, u1, u2, u3);
             if (!(glm::dot(in.wi, side) > 0.0f) || is_black(in.value)) continue;
             const float cos_shading = std::fabs(glm::dot(in.wi, b.n));
@@ -146,7 +161,11 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             // Stop just short of the light's own point so the light's surroundings still shadow it.
             const glm::vec3 t = shadow_transmittance(scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), transparency);
             if (is_black(t)) continue;
-            const float w = (delta || !weighted) ? 1.0f : power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set));
+            // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
+            const float w = (delta || !weighted)
+                                ? 1.0f
+                                : (probes == n ? power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set))
+                                               : power_heuristic(float(n) * in.pdf, float(probes) * bsdf_pdf(b, in.wi, set)));
             light_sum += f * in.value * t * (cos_shading * w);
         }
         sum += light_sum / static_cast<float>(n);
@@ -155,13 +174,16 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
 
     // The BSDF's own directions, each adding the first emitter it meets, weighted against light sampling.
     const RayTracer& tracer = scene.ray_tracer();
-    const int m = std::max(1, samples_per_light);
+    const int m = probes;
     glm::vec3 bsdf_sum(0.0f);
     const StrataGrid probe_grid = strata_grid(m);
     for (int k = 0; k < m; ++k) {
-        const float u0 = rng.uniform();
+        float u0 = rng.uniform();
         float u1 = rng.uniform(), u2 = rng.uniform();
-        probe_grid.place(k, u1, u2);
+        if (world_sampled && sequences.bsdf != nullptr)
+            sequences.bsdf->point(sequences.iteration * uint32_t(m) + uint32_t(k), u1, u2, u0);
+        else
+            probe_grid.place(k, u1, u2);
         const BsdfSample bs = bsdf_sample_set(b, set, u0, u1, u2);
         if (bs.kind != ScatterKind::lobes || !(glm::dot(bs.direction, side) > 0.0f)) continue;
         ++rays;
@@ -191,8 +213,8 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         } else if (!found && world_sampled) {
             // A programmed world: whatever the BSDF sampled, weighted against the world's map (and portals).
             const float p_light = sources.world().pdf(x, side, bs.direction);
-            bsdf_sum += bs.weight * world_radiance(scene, bs.direction, ShaderRay::reflected) *
-                        power_heuristic(bs.pdf, p_light);
+            const float w = power_heuristic(float(m) * bs.pdf, float(world_samples) * p_light);
+            bsdf_sum += bs.weight * world_radiance(scene, bs.direction, ShaderRay::reflected) * w;
         } else if (!found) {
             // The world: the lobes' part only (light sampling took Lambert's), f_lobes·cos / pdf.
             glm::vec3 lobes_weight = bs.weight;
@@ -216,6 +238,8 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
     const LightSources sources(scene);
     if (sources.size() == 0 || samples.samples.empty()) return out;
     const DirectLightContext context{scene, sources, settings.samples_per_light, scene_has_transparency(scene)};
+    bool world_sampled = false;  // a programmed world: its samples follow each view sample's sequence
+    for (size_t l = 0; l < sources.size(); ++l) world_sampled = world_sampled || (sources.is_world(l) && !sources.world().constant());
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> shadow_rays{0};
     std::atomic<uint64_t> samples_done{0};
@@ -230,10 +254,18 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
             // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
-            Rng rng(settings.seed, RngDomain::direct_light, uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32));
+            const uint64_t key = uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32);
+            Rng rng(settings.seed, RngDomain::direct_light, key);
             bsdf_of(s, samples.lobes, b);
+            DirectLightSequences sequences;
+            std::optional<SampleSequence> light_points, bsdf_points;
+            if (world_sampled) {
+                light_points.emplace(settings.sequence_seed, key, SampleSequence::kLightStream);
+                bsdf_points.emplace(settings.sequence_seed, key, SampleSequence::kBsdfStream);
+                sequences = {&*light_points, &*bsdf_points, settings.iteration};
+            }
             out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                    LobeSet::reflection, rng, rays);
+                                                    LobeSet::reflection, rng, rays, sequences);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

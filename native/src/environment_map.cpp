@@ -152,6 +152,12 @@ glm::vec3 EnvironmentDistribution::texel(int x, int y) const {
 }
 
 EnvironmentSample EnvironmentDistribution::sample(float u1, float u2) const {
+    EnvironmentSample s = sample_direction(u1, u2);
+    if (s.pdf > 0.0f) s.radiance = radiance(s.direction);
+    return s;
+}
+
+EnvironmentSample EnvironmentDistribution::sample_direction(float u1, float u2) const {
     EnvironmentSample s;
     if (is_zero()) return s;
     u1 = unit_interval(u1);
@@ -189,9 +195,8 @@ EnvironmentSample EnvironmentDistribution::sample(float u1, float u2) const {
         constexpr double inside = 1e-3;
         place(std::clamp(du, inside, 1.0 - inside), std::clamp(dv, inside, 1.0 - inside), cx, cy, cell_sin_theta);
     }
-    // pdf and radiance of the cell the direction lies in: identical to pdf() and radiance() of it.
+    // The pdf of the cell the direction lies in: identical to pdf() of it.
     s.pdf = cell_pdf(cx, cy, cell_sin_theta);
-    s.radiance = texel(cx, cy);
     return s;
 }
 

@@ -193,6 +193,8 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         ViewSampleSettings view_settings;
         view_settings.seed = seed;
         view_settings.jitter = iteration.index > 0;
+        view_settings.sequence_seed = settings.seed;
+        view_settings.iteration = iteration.index;
         view_settings.max_specular_depth = settings.max_bounces;
         view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
@@ -204,6 +206,8 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         DirectLightSettings direct_settings;
         direct_settings.seed = seed;
         direct_settings.samples_per_light = settings.direct_samples;
+        direct_settings.sequence_seed = settings.seed;
+        direct_settings.iteration = iteration.index;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
         stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
 

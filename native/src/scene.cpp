@@ -432,6 +432,7 @@ void Scene::fit_origin() {
     // Every instance's render-space translation changed: the next render updates them all (a refit).
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     if (!ray_tracer_) return;
+    tracer_current_ = false;
     moved_instances_.resize(instances_.size());
     for (uint32_t i = 0; i < instances_.size(); ++i) moved_instances_[i] = i;
 }
@@ -479,6 +480,7 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const st
     instances_.push_back(std::move(instance));
     recentre();
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
+    tracer_current_ = false;
     ray_tracer_.reset();
     moved_instances_.clear();
     return static_cast<uint32_t>(instances_.size() - 1);
@@ -493,7 +495,10 @@ void Scene::set_instance_transform(uint32_t id, const glm::dmat4& to_world) {
     require_finite_transform(to_world, "instance '" + instance.name + "'.transform");
     place(instance, to_world);
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
-    if (ray_tracer_) moved_instances_.push_back(id);
+    if (ray_tracer_) {
+        tracer_current_ = false;
+        moved_instances_.push_back(id);
+    }
 }
 
 void Scene::add_mesh(const MeshInput& mesh) {
@@ -573,6 +578,7 @@ glm::vec3 Scene::bounds_max() const {
 }
 
 const RayTracer& Scene::ray_tracer() const {
+    if (tracer_current_.load(std::memory_order_acquire)) return *ray_tracer_;
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     if (!ray_tracer_) {
         ray_tracer_ = std::make_unique<RayTracer>(meshes_, instances_);
@@ -580,6 +586,7 @@ const RayTracer& Scene::ray_tracer() const {
         ray_tracer_->update_instances(instances_, moved_instances_);
     }
     moved_instances_.clear();
+    tracer_current_.store(true, std::memory_order_release);
     return *ray_tracer_;
 }
 

@@ -17,6 +17,7 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
+#include "photonsplat/sample_sequence.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shading.h"
 #include "photonsplat/stats.h"
@@ -309,9 +310,9 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                     Rng rng(settings.seed, RngDomain::camera, pixel);
                     float jx = 0.5f, jy = 0.5f;
                     if (settings.jitter) {
-                        Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
-                        jx = jitter.uniform();
-                        jy = jitter.uniform();
+                        float unused;
+                        SampleSequence(settings.sequence_seed, pixel, SampleSequence::kJitterStream)
+                            .point(settings.iteration, jx, jy, unused);
                     }
                     const CameraPath start{
                         camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy), glm::vec3(1.0f), 0};

@@ -136,9 +136,13 @@ WorldLight::WorldLight(const Scene& scene) : scene_(scene), background_(scene.ba
     }
 
     // The map: the program's (or the constant's) radiance averaged over each cell.
+    // Automatic: twice the widest Environment Texture's width. The image is interpolated linearly between
+    // texel centres, so a sun texel's light spills half a texel into its neighbours' cells; cells of half a texel
+    // follow that ramp (measured under city.exr: a sample's relative variance 0.17 with cells of one texel,
+    // 0.065 with half, 0.043 with a quarter; tests/python/test_world.py).
     int width = scene.world_map_resolution();
     if (width <= 0) {
-        width = program ? environment_image_width(scene, *program) : 0;
+        width = program ? 2 * environment_image_width(scene, *program) : 0;
         if (width <= 0) width = program ? kDefaultMapWidth : 64;
     }
     width = std::clamp(width, 8, kMaxMapWidth);
@@ -300,7 +304,7 @@ LightIncidence WorldLight::sample_incidence(const glm::vec3& x, const glm::vec3&
     } else if (m.sun > 0.0f && u3 < m.portal + m.sun) {
         out.wi = sample_cone(sun_axis_, sun_one_minus_cos_, u1, u2);
     } else if (m.map > 0.0f) {
-        const EnvironmentSample s = map_->sample(u1, u2);
+        const EnvironmentSample s = map_->sample_direction(u1, u2);
         if (!(s.pdf > 0.0f)) return out;
         out.wi = s.direction;
     } else {
@@ -374,7 +378,7 @@ EmissionSample WorldLight::sample_emission(const glm::vec3& center, float radius
         s.direction = sample_cone(sun_axis_, sun_one_minus_cos_, u3 / sun_photon_share_, u4);
     } else {
         const float u = has_sun_ ? (u3 - sun_photon_share_) / (1.0f - sun_photon_share_) : u3;
-        s = map_->sample(std::min(u, std::nextafter(1.0f, 0.0f)), u4);
+        s = map_->sample_direction(std::min(u, std::nextafter(1.0f, 0.0f)), u4);
         if (!(s.pdf > 0.0f)) return out;
     }
     s.pdf = has_sun_ ? sun_photon_share_ * sun_pdf(s.direction) + (1.0f - sun_photon_share_) * map_pdf(s.direction)

@@ -15,12 +15,17 @@ class Scene;
 class RenderControl;
 class LightSources;
 class Rng;
+class SampleSequence;
 struct Stats;
 struct ViewSamples;
 
 struct DirectLightSettings {
     uint64_t seed = 0;
     int samples_per_light = 4;  // shadow rays per light with a size (a point of radius 0 or a 0° sun needs 1)
+    // A programmed world's samples come from each view sample's low-discrepancy sequence (sample_sequence.h),
+    // scrambled by sequence_seed (the render's seed), iteration `iteration` taking its samples_per_light points.
+    uint64_t sequence_seed = 0;
+    uint32_t iteration = 0;
 };
 
 // Reflected direct radiance per view sample (index-aligned with samples.samples), throughput included.
@@ -41,8 +46,16 @@ struct DirectLightContext {
     int samples_per_light;
     bool transparency;  // scene_has_transparency(scene)
 };
+// `sequences` (optional): the view sample's two sequences (light samples, BSDF samples) and the iteration, whose
+// k samples of each kind take points iteration·k … iteration·k + k − 1 (consecutive points: a stride would
+// leave part of the square unvisited); a programmed world then draws from them instead of rng.
+struct DirectLightSequences {
+    const SampleSequence* light = nullptr;
+    const SampleSequence* bsdf = nullptr;
+    uint32_t iteration = 0;
+};
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
-                          LobeSet set, Rng& rng, uint64_t& rays);
+                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences = {});
 
 // What reaches `ray.origin` from ray.origin + t_max·direction: 1, 0 behind an opaque surface, the product of
 // the transparent weights of the surfaces crossed where the scene has transparency (`transparency`).

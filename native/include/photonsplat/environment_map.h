@@ -83,6 +83,9 @@ public:
     // a pole, about one in a million, is moved a thousandth of the cell inside). A zero map returns pdf 0
     // (direction +Z, radiance 0): skip the sample.
     EnvironmentSample sample(float u1, float u2) const;
+    // The same direction and pdf without the radiance (left 0): for a renderer that evaluates the world's shader
+    // itself, which saves a read of the map per sample.
+    EnvironmentSample sample_direction(float u1, float u2) const;
 
     // Solid-angle density with which sample() draws `direction` (any non-zero length); 0 where the map weighs
     // 0, at ±Z, for a zero map and for a zero or non-finite vector.
