@@ -17,7 +17,6 @@
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
 #include "photonsplat/scattering.h"
-#include "photonsplat/sample_sequence.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shading.h"
 #include "photonsplat/stats.h"
@@ -310,9 +309,9 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                     Rng rng(settings.seed, RngDomain::camera, pixel);
                     float jx = 0.5f, jy = 0.5f;
                     if (settings.jitter) {
-                        float unused;
-                        SampleSequence(settings.sequence_seed, pixel, SampleSequence::kJitterStream)
-                            .point(settings.iteration, jx, jy, unused);
+                        Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
+                        jx = jitter.uniform();
+                        jy = jitter.uniform();
                     }
                     const CameraPath start{
                         camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy), glm::vec3(1.0f), 0};

@@ -1,14 +1,13 @@
-// Low-discrepancy points per pixel, continued across the iterations of a progressive render: iteration i takes
+// Low-discrepancy points per view sample, continued across the iterations of a progressive render: iteration i takes
 // points i·n … i·n + n − 1. Cycles draws a pixel's samples from one such sequence, so its error falls faster than
-// 1/N where the integrand is smooth (the sky over a floor, a pixel's coverage of an edge); independent random
-// numbers per iteration do not. Used for where in its pixel a camera ray goes and for a programmed world's
-// direct light.
+// 1/N where the integrand is smooth (the sky over a floor); independent random numbers per iteration do not.
+// Used for a programmed world's direct light.
 //
 // Dimensions 1 and 2 are Sobol's (0,2)-sequence (the radical inverse in base 2 and Sobol's second dimension),
 // Owen-scrambled per pixel and stream by hashing (Burley 2020, "Practical Hash-based Owen Scrambling": a
 // Laine–Karras permutation of the bit-reversed value), and each stream takes the points in its own shuffled
 // order (the same scrambling of the index). Scrambling the values alone (an XOR) would leave two streams the
-// same sequence in a fixed relation: where in its pixel a ray goes would decide which way its light sample goes.
+// same sequence in a fixed relation: where a light sample goes would decide where its BSDF sample goes.
 // Dimension 3 is the radical inverse in base 3 of the shuffled index, rotated. The scrambles come from the
 // render's seed and the pixel, never from the iteration, so the iterations continue one sequence.
 #pragma once
@@ -20,10 +19,10 @@ namespace ps {
 
 class SampleSequence {
 public:
-    static constexpr uint64_t kLightStream = 0, kBsdfStream = 1, kJitterStream = 2;
+    static constexpr uint64_t kLightStream = 0, kBsdfStream = 1;
 
-    // `key`: the pixel (and the view sample's branch); `stream`: which use of the sequence, each scrambled apart
-    // (kLightStream, kBsdfStream: direct light; kJitterStream: where in its pixel a camera ray goes).
+    // `key`: the view sample (pixel and branch); `stream`: which use of the sequence, each scrambled apart
+    // (kLightStream: light samples, kBsdfStream: BSDF samples).
     SampleSequence(uint64_t seed, uint64_t key, uint64_t stream) {
         Rng rng(seed ^ (stream * 0xA24BAED4963EE407ull), RngDomain::sample_sequence, key);
         shuffle_ = rng.next_u32();

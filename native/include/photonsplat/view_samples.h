@@ -68,13 +68,10 @@ struct ViewSamples {
 struct ViewSampleSettings {
     uint64_t seed = 0;
     int max_specular_depth = 8;   // bounces through mirror/glass before the path is dropped
-    // false: every ray through its pixel's centre (a one-shot render). true: through the point `iteration` of
-    // the pixel's low-discrepancy sequence (sample_sequence.h, scrambled by sequence_seed, the render's seed);
-    // progressive passes after the first use it, so their mean is box-filtered over each pixel (anti-aliasing),
-    // the pixel's area stratified over the passes.
+    // false: every ray through its pixel's centre (a one-shot render). true: through a point drawn uniformly in
+    // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
+    // mean is box-filtered over each pixel (anti-aliasing).
     bool jitter = false;
-    uint64_t sequence_seed = 0;
-    uint32_t iteration = 0;
     // Follow every part of the BSDF at a camera path's first surface (the view sample of its lobes, the mirror,
     // the refraction, transparency, the rough transmission: a sample each), instead of one chosen with its
     // weight's probability. Later surfaces always choose one.
