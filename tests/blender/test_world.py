@@ -568,10 +568,11 @@ def test_map_resolution_reaches_the_core(empty_scene, core):
     world.cycles.sample_map_resolution = 64
     info = real_sync(core).scene.world_map_info()
     assert (info["map_width"], info["map_height"]) == (64, 32)
-    world.cycles.sampling_method = 'AUTOMATIC'            # the Environment Texture's width, 8
+    # Automatic: twice the Environment Texture's width (8), cells of half a texel (docs/world.md).
+    world.cycles.sampling_method = 'AUTOMATIC'
     world.update_tag()                                    # (the UI tags the world; Python alone does not)
     info = real_sync(core).scene.world_map_info()
-    assert info["map_width"] == 8
+    assert info["map_width"] == 16
 
 
 def test_portals_reach_the_core(empty_scene, core):
