@@ -69,6 +69,7 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
 
 }  // namespace
 
+// A programmed world's light samples per view sample, in units of direct_samples (see direct_light_at).
 constexpr int kWorldSampleFactor = 2;
 
 float power_heuristic(float chosen, float other) {
@@ -125,7 +126,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     for (size_t l = 0; l < sources.size(); ++l) world_sampled = world_sampled || (sources.is_world(l) && !world_constant);
     // BSDF directions: as many as light samples where the BSDF has lobes (a highlight is theirs to find); on a
     // Lambert surface only a programmed world needs them, for what its map under-weights, and one does: the map
-    // takes nearly all of a Lambert surface's light (a third less direct-light time under an HDRI).
+    // takes nearly all of a Lambert surface's light.
     const int probes = mis ? std::max(1, samples_per_light) : 1;
     // A programmed world takes twice the light samples of a light: its map is what most surfaces see (an HDRI's
     // sun, sky and ground at once) and a sample costs less than the photons' share of an iteration.
