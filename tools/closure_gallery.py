@@ -116,16 +116,28 @@ def run_in_blender(argv):
     if args.report_only:
         report_only(args)
         return
-    build = (REPO / args.build).resolve() if not os.path.isabs(args.build) else Path(args.build)
-    addon = build / "blender" / "addons" / "photonsplat"
-    if not addon.is_dir():
-        sys.exit(f"no add-on at {addon}: build the project first (or pass --build)")
-    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(build / "blender"))
-    command = [args.blender, "-b", "--factory-startup", "-noaudio", "--addons", "photonsplat", str(GALLERY_BLEND),
-               "--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--", *argv]
+    run_blender_script("closure_gallery", __file__, argv, args.blender, args.build, GALLERY_BLEND)
+
+
+def run_blender_script(tool, script, argv, blender, build, blend=None, hint="--build"):
+    """Runs `script` (with `argv` after "--") inside Debian's Blender in the background, on `blend` if given,
+    with the Photon Splat add-on of the build folder `build` (None: without it, Cycles only), and exits with
+    Blender's status. `hint` names the options that avoid a missing add-on."""
+    env = dict(os.environ)
+    command = [blender, "-b", "--factory-startup", "-noaudio"]
+    if build is not None:
+        folder = (REPO / build).resolve() if not os.path.isabs(build) else Path(build)
+        addon = folder / "blender" / "addons" / "photonsplat"
+        if not addon.is_dir():
+            sys.exit(f"no add-on at {addon}: build the project first (or pass {hint})")
+        env["BLENDER_USER_SCRIPTS"] = str(folder / "blender")
+        command += ["--addons", "photonsplat"]
+    if blend is not None:
+        command.append(str(blend))
+    command += ["--python-exit-code", "1", "--python", str(Path(script).resolve()), "--", *argv]
     started = time.time()
     code = subprocess.call(command, env=env)
-    print(f"closure_gallery: Blender exited {code} after {time.time() - started:.0f} s")
+    print(f"{tool}: Blender exited {code} after {time.time() - started:.0f} s")
     sys.exit(code)
 
 

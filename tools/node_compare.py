@@ -96,20 +96,10 @@ def run_in_blender(argv):
         results = json.loads((OUT_DIR / "results.json").read_text())
         write_markdown(results, Path(args.markdown))
         return
-    env = dict(os.environ)
-    command = [args.blender, "-b", "--factory-startup", "-noaudio"]
-    if not args.cycles_only:
-        build = (REPO / args.build).resolve() if not os.path.isabs(args.build) else Path(args.build)
-        addon = build / "blender" / "addons" / "photonsplat"
-        if not addon.is_dir():
-            sys.exit(f"no add-on at {addon}: build the project first (or pass --build, or --cycles-only)")
-        env["BLENDER_USER_SCRIPTS"] = str(build / "blender")
-        command += ["--addons", "photonsplat"]
-    command += ["--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--", *argv]
-    started = time.time()
-    code = subprocess.call(command, env=env)
-    print(f"node_compare: Blender exited {code} after {time.time() - started:.0f} s")
-    sys.exit(code)
+    sys.path.insert(0, str(REPO / "tools"))
+    from closure_gallery import run_blender_script
+    run_blender_script("node_compare", __file__, argv, args.blender, None if args.cycles_only else args.build,
+                       hint="--build, or --cycles-only")
 
 
 # ---- inside Blender: shared with tests/blender/test_node_pixels.py -------------------------------------------

@@ -28,14 +28,14 @@ import hashlib
 import json
 import os
 import platform
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
-from closure_gallery import commit_of_repo, display, render_exr, use_cycles_oracle, write_png  # noqa: E402
+from closure_gallery import (commit_of_repo, display, render_exr, run_blender_script, use_cycles_oracle,  # noqa: E402
+                             write_png)
 
 OUT_DIR = REPO / "build" / "texture_gallery"
 RESULTS_MD = REPO / "docs" / "results" / "texture_gallery.md"
@@ -88,21 +88,8 @@ def run_in_blender(argv):
     if args.report_only:
         report_only(args)
         return
-    env = dict(os.environ)
-    command = [args.blender, "-b", "--factory-startup", "-noaudio"]
-    if not args.cycles_only:
-        build = (REPO / args.build).resolve() if not os.path.isabs(args.build) else Path(args.build)
-        addon = build / "blender" / "addons" / "photonsplat"
-        if not addon.is_dir():
-            sys.exit(f"no add-on at {addon}: build the project first (or pass --build, or --cycles-only)")
-        env["BLENDER_USER_SCRIPTS"] = str(build / "blender")
-        command += ["--addons", "photonsplat"]
-    command += [str(args.blend), "--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--",
-                *argv]
-    started = time.time()
-    code = subprocess.call(command, env=env)
-    print(f"texture_gallery: Blender exited {code} after {time.time() - started:.0f} s")
-    sys.exit(code)
+    run_blender_script("texture_gallery", __file__, argv, args.blender, None if args.cycles_only else args.build,
+                       args.blend, hint="--build, or --cycles-only")
 
 
 # ---- inside Blender -------------------------------------------------------------------------------------------

@@ -51,7 +51,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "tools"))
 sys.path.insert(0, str(REPO / "tests" / "blender"))     # scene_geometry: the glass sphere's caustic
-from closure_gallery import commit_of_repo, display, use_cycles_oracle, write_png  # noqa: E402
+from closure_gallery import (commit_of_repo, display, run_blender_script, use_cycles_oracle,  # noqa: E402
+                             write_png)
 
 OUT_DIR = REPO / "build" / "world_compare"
 RESULTS_MD = REPO / "docs" / "results" / "worlds.md"
@@ -108,20 +109,8 @@ def run_in_blender(argv):
     if args.report_only:
         report_only(args)
         return
-    env = dict(os.environ)
-    command = [args.blender, "-b", "--factory-startup", "-noaudio"]
-    if not args.cycles_only:
-        build = (REPO / args.build).resolve() if not os.path.isabs(args.build) else Path(args.build)
-        addon = build / "blender" / "addons" / "photonsplat"
-        if not addon.is_dir():
-            sys.exit(f"no add-on at {addon}: build the project first (or pass --build, or --cycles-only)")
-        env["BLENDER_USER_SCRIPTS"] = str(build / "blender")
-        command += ["--addons", "photonsplat"]
-    command += ["--python-exit-code", "1", "--python", str(Path(__file__).resolve()), "--", *argv]
-    started = time.time()
-    code = subprocess.call(command, env=env)
-    print(f"world_compare: Blender exited {code} after {time.time() - started:.0f} s")
-    sys.exit(code)
+    run_blender_script("world_compare", __file__, argv, args.blender, None if args.cycles_only else args.build,
+                       hint="--build, or --cycles-only")
 
 
 # ---- measures (numpy only) ------------------------------------------------------------------------------------
