@@ -20,7 +20,7 @@
     X(rtcReleaseScene) X(rtcGetSceneBounds) X(rtcNewGeometry) X(rtcSetNewGeometryBuffer)                   \
     X(rtcSetGeometryMask) X(rtcSetGeometryInstancedScene) X(rtcSetGeometryTimeStepCount)                   \
     X(rtcSetGeometryTransform) X(rtcCommitGeometry) X(rtcAttachGeometryByID) X(rtcReleaseGeometry)         \
-    X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1)
+    X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1) X(rtcUpdateGeometryBuffer)
 
 namespace ps {
 

@@ -1,4 +1,5 @@
 #include "photonsplat/light_sources.h"
+#include "photonsplat/ray_tracer.h"
 
 #include "photonsplat/material_program.h"
 
@@ -140,7 +141,7 @@ EmissionSample LightSources::sample_emission(size_t i, float u1, float u2, float
             if (u5 < 0.5f) ng = -ng;  // both faces emit
             EmissionSample out;
             out.origin = offset_ray_origin(point_on_triangle(t, u2, u3), ng,
-                                           scene_.instances()[emitters_[k].instance].rounding_scale);
+                                           scene_.ray_tracer().rounding_scale(emitters_[k].instance));
             out.direction = sample_cosine_hemisphere(ng, u4, std::fmod(2.0f * u5, 1.0f));
             // Φ_k / p_k, with Φ_k = 2π·A_k·L_k: the triangle's colour rides on the photon's power.
             out.power = 2.0f * kPi * triangle_area(t) * emission_of(k) / emitter_probability_[k];

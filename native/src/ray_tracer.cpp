@@ -67,8 +67,10 @@ void set_instance_transform(RTCGeometry geometry, const Instance& instance) {
 struct RayTracer::Impl {
     const EmbreeApi& rtc = embree_api();   // every Embree call goes through this table (embree_api.h says why)
     RTCScene top = nullptr;
-    std::vector<RTCScene> meshes;          // one per MeshData (nullptr when it has no triangles)
-    std::vector<RTCGeometry> instances;    // one per Instance (nullptr when its mesh is empty)
+    std::vector<RTCScene> meshes;          // one per MeshData traced as an instance (nullptr otherwise)
+    // One per Instance (nullptr when its mesh is empty): its render-space triangles, or an instance of its mesh.
+    std::vector<RTCGeometry> instances;
+    std::vector<float*> placed_vertices;   // per Instance: Embree's vertex buffer of its placed triangles, or null
 
     ~Impl() {
         for (RTCGeometry g : instances)
@@ -79,71 +81,122 @@ struct RayTracer::Impl {
     }
 };
 
+namespace {
+
+// A triangle geometry holding the mesh's triangles, its vertices to be written by the caller; throws when Embree
+// cannot hold them.
+RTCGeometry triangle_geometry(const EmbreeApi& rtc, RTCDevice device, const MeshData& mesh, float*& vertices) {
+    const size_t triangles = mesh.triangle_count();
+    RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    vertices = static_cast<float*>(rtc.rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), mesh.positions.size()));
+    auto* indices = static_cast<unsigned*>(rtc.rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
+                                                                       RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
+    if (!vertices || !indices) {
+        rtc.rtcReleaseGeometry(geometry);
+        throw std::runtime_error("Embree: out of memory for mesh '" + mesh.name + "' (" + std::to_string(triangles) +
+                                 " triangles)");
+    }
+    for (size_t i = 0; i < mesh.indices.size(); ++i) indices[i] = mesh.indices[i];
+    return geometry;
+}
+
+// Whether an instance's triangles go into the top level in render space: its mesh is shown by no other instance
+// (a shared mesh is stored once, under instances), and the instance lies within 64 of its own sizes of the render
+// origin, so that its corners, rounded in render space, lose at most 6 bits of what object space kept (as
+// MeshData's re-centring allows); farther out it stays an instance, exact in its own space.
+bool places_triangles(const MeshData& mesh, const Instance& instance, uint32_t users) {
+    if (users != 1 || is_flat(instance)) return false;
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                          (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                          (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::vec3 q(instance.to_world * glm::vec4(p, 1.0f));
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    const glm::vec3 reach = glm::max(glm::abs(lo), glm::abs(hi));
+    const glm::vec3 extent = hi - lo;
+    const float side = std::max(extent.x, std::max(extent.y, extent.z));
+    return std::max(reach.x, std::max(reach.y, reach.z)) <= 64.0f * side;
+}
+
+}  // namespace
+
 RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances) : impl_(new Impl) {
     try {
         const EmbreeApi& rtc = impl_->rtc;
         RTCDevice device = shared_device();
         rtc.rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
-        for (const MeshData& mesh : meshes) {
-            const size_t triangles = mesh.triangle_count();
-            if (triangles == 0) {
-                impl_->meshes.push_back(nullptr);
-                continue;
-            }
+        std::vector<uint32_t> users(meshes.size(), 0);
+        for (const Instance& instance : instances) ++users[instance.mesh];
+        rounding_.assign(instances.size(), 0.0f);
+        placed_.assign(instances.size(), 0);
+        impl_->placed_vertices.assign(instances.size(), nullptr);
+        for (uint32_t i = 0; i < instances.size(); ++i) {
+            const MeshData& mesh = meshes[instances[i].mesh];
+            placed_[i] = mesh.triangle_count() > 0 && places_triangles(mesh, instances[i], users[instances[i].mesh]);
+        }
+        // The object-space BVH of every mesh that some instance traces as an instance.
+        impl_->meshes.assign(meshes.size(), nullptr);
+        for (uint32_t i = 0; i < instances.size(); ++i) {
+            const uint32_t m = instances[i].mesh;
+            const MeshData& mesh = meshes[m];
+            if (placed_[i] || impl_->meshes[m] || mesh.triangle_count() == 0) continue;
             RTCScene scene = rtc.rtcNewScene(device);
             if (!scene) throw_on_embree_error(device, "creating a mesh scene");
-            impl_->meshes.push_back(scene);
+            impl_->meshes[m] = scene;
             rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-            RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* vertices = static_cast<float*>(rtc.rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-            auto* indices = static_cast<unsigned*>(rtc.rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
-            if (!vertices || !indices) {
-                rtc.rtcReleaseGeometry(geometry);
-                throw std::runtime_error("Embree: out of memory for mesh '" + mesh.name + "' (" +
-                                         std::to_string(triangles) + " triangles)");
+            float* vertices = nullptr;
+            RTCGeometry geometry = triangle_geometry(rtc, device, mesh, vertices);
+            for (size_t k = 0; k < mesh.positions.size(); ++k) {
+                vertices[3 * k + 0] = mesh.positions[k].x;
+                vertices[3 * k + 1] = mesh.positions[k].y;
+                vertices[3 * k + 2] = mesh.positions[k].z;
             }
-            for (size_t i = 0; i < mesh.positions.size(); ++i) {
-                vertices[3 * i + 0] = mesh.positions[i].x;
-                vertices[3 * i + 1] = mesh.positions[i].y;
-                vertices[3 * i + 2] = mesh.positions[i].z;
-            }
-            for (size_t i = 0; i < mesh.indices.size(); ++i) indices[i] = mesh.indices[i];
             rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
             rtc.rtcCommitGeometry(geometry);
             rtc.rtcAttachGeometryByID(scene, geometry, 0);
             rtc.rtcReleaseGeometry(geometry);
             rtc.rtcCommitScene(scene);
             throw_on_embree_error(device, "building a mesh BVH");
-            bytes_ += mesh.positions.size() * 3 * sizeof(float) + triangles * 3 * sizeof(unsigned);
+            bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
         }
 
         impl_->top = rtc.rtcNewScene(device);
         if (!impl_->top) throw_on_embree_error(device, "creating the scene");
-        // Dynamic: moving instances refits the top level instead of rebuilding it from scratch.
+        // Dynamic: a moved object rebuilds its own part and the top, not the whole scene.
         rtc.rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
         for (uint32_t i = 0; i < instances.size(); ++i) {
-            RTCScene mesh = impl_->meshes[instances[i].mesh];
-            if (!mesh) {
+            const MeshData& mesh = meshes[instances[i].mesh];
+            RTCGeometry geometry = nullptr;
+            if (placed_[i]) {
+                geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
+                impl_->instances.push_back(geometry);  // owned from here on, released by ~Impl
+                place_triangles(mesh, instances[i], i);
+                bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+            } else if (RTCScene scene = impl_->meshes[instances[i].mesh]) {
+                geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+                impl_->instances.push_back(geometry);
+                rtc.rtcSetGeometryInstancedScene(geometry, scene);
+                rtc.rtcSetGeometryTimeStepCount(geometry, 1);
+                set_instance_transform(geometry, instances[i]);
+                rounding_[i] = instances[i].rounding_scale;
+                bytes_ += sizeof(glm::mat4) + 64;  // transform + a top-level BVH node, roughly
+            } else {
                 impl_->instances.push_back(nullptr);
                 continue;
             }
-            RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-            rtc.rtcSetGeometryInstancedScene(geometry, mesh);
-            rtc.rtcSetGeometryTimeStepCount(geometry, 1);
-            set_instance_transform(geometry, instances[i]);
             rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
             rtc.rtcCommitGeometry(geometry);
             // The geometry id is the instance index: hits name their instance directly.
             rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
             if (is_flat(instances[i])) rtc.rtcDisableGeometry(geometry);
-            impl_->instances.push_back(geometry);
         }
         rtc.rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
         measure_reach(instances);
-        bytes_ += instances.size() * (sizeof(glm::mat4) + 64);  // transform + a top-level BVH node, roughly
     } catch (...) {
         delete impl_;
         throw;
@@ -152,12 +205,34 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
 
 RayTracer::~RayTracer() { delete impl_; }
 
-void RayTracer::update_instances(const std::vector<Instance>& instances, const std::vector<uint32_t>& moved) {
+// Writes the instance's triangles' corners in render space into its geometry's vertex buffer, and the rounding
+// they carry.
+void RayTracer::place_triangles(const MeshData& mesh, const Instance& instance, uint32_t id) {
+    float* vertices = impl_->placed_vertices[id];
+    float scale = 0.0f;
+    for (size_t k = 0; k < mesh.positions.size(); ++k) {
+        const glm::vec3 q(instance.to_world * glm::vec4(mesh.positions[k], 1.0f));
+        vertices[3 * k + 0] = q.x;
+        vertices[3 * k + 1] = q.y;
+        vertices[3 * k + 2] = q.z;
+        if (std::isfinite(q.x + q.y + q.z)) scale = std::max(scale, std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z))));
+    }
+    rounding_[id] = std::max(scale, instance.rounding_scale);
+}
+
+void RayTracer::update_instances(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances,
+                                 const std::vector<uint32_t>& moved) {
     const EmbreeApi& rtc = impl_->rtc;
     for (uint32_t i : moved) {
         RTCGeometry geometry = impl_->instances[i];
         if (!geometry) continue;
-        set_instance_transform(geometry, instances[i]);
+        if (placed_[i]) {
+            place_triangles(meshes[instances[i].mesh], instances[i], i);
+            rtc.rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+        } else {
+            set_instance_transform(geometry, instances[i]);
+            rounding_[i] = instances[i].rounding_scale;
+        }
         rtc.rtcCommitGeometry(geometry);
         if (is_flat(instances[i]))
             rtc.rtcDisableGeometry(geometry);
@@ -171,8 +246,9 @@ void RayTracer::update_instances(const std::vector<Instance>& instances, const s
 
 void RayTracer::measure_reach(const std::vector<Instance>& instances) {
     reach_scale_ = reach_offset_ = 0.0;
-    for (const Instance& instance : instances) {
-        if (is_flat(instance)) continue;
+    for (uint32_t i = 0; i < instances.size(); ++i) {
+        const Instance& instance = instances[i];
+        if (is_flat(instance) || placed_[i]) continue;  // placed triangles take rays as they are
         // normal_to_world is M⁻¹ transposed: the same Frobenius norm, which bounds the spectral one.
         const glm::dmat3 n(instance.normal_to_world);
         const double scale = std::sqrt(glm::dot(n[0], n[0]) + glm::dot(n[1], n[1]) + glm::dot(n[2], n[2]));
@@ -249,9 +325,10 @@ bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hi
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     impl_->rtc.rtcIntersect1(impl_->top, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) return false;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar + shift;
-    hit.instance = rh.hit.instID[0];
+    // A hit inside an instance names it in instID; placed triangles are their instance's own geometry.
+    hit.instance = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
     hit.triangle = rh.hit.primID;
     hit.u = rh.hit.u;
     hit.v = rh.hit.v;

@@ -57,7 +57,7 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Shad
     s.distance = hit.t;
     s.ray_kind = kind;
     s.material = &scene.materials()[mesh.materials[t]];
-    s.rounding_scale = instance.rounding_scale;
+    s.rounding_scale = scene.ray_tracer().rounding_scale(hit.instance);
     s.uv = glm::vec2(0.0f);
     if (s.material->textured && !mesh.uvs.empty())
         s.uv = w * mesh.uvs[3 * t] + hit.u * mesh.uvs[3 * t + 1] + hit.v * mesh.uvs[3 * t + 2];

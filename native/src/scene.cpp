@@ -583,7 +583,7 @@ const RayTracer& Scene::ray_tracer() const {
     if (!ray_tracer_) {
         ray_tracer_ = std::make_unique<RayTracer>(meshes_, instances_);
     } else if (!moved_instances_.empty()) {
-        ray_tracer_->update_instances(instances_, moved_instances_);
+        ray_tracer_->update_instances(meshes_, instances_, moved_instances_);
     }
     moved_instances_.clear();
     tracer_current_.store(true, std::memory_order_release);

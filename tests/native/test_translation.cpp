@@ -91,6 +91,51 @@ TEST(Instancing, MovingAnInstanceUpdatesHitsWithoutRebuildingMeshes) {
     EXPECT_THROW(scene.set_instance_transform(7, moved), InvalidInput);
 }
 
+TEST(Instancing, AMeshShownOnceIsPlacedInRenderSpaceAndMovesWithItsObject) {
+    Scene scene;
+    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.8f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t once = add_unit_quad(scene, white);
+    const uint32_t shared = add_unit_quad(scene, white);
+    const uint32_t far = add_unit_quad(scene, white);
+    const uint32_t a = scene.add_instance(once, glm::scale(translation(0, 0, 0), glm::vec3(2.0f)));
+    const uint32_t b = scene.add_instance(shared, translation(5, 0, 0));
+    const uint32_t c = scene.add_instance(shared, translation(7, 0, 0));
+    // 300 of its own sizes from the others: placed in render space it would lose 8 bits, so it stays an instance.
+    const uint32_t d = scene.add_instance(far, translation(300, 0, 0));
+    const RayTracer& tracer = scene.ray_tracer();
+    EXPECT_TRUE(tracer.placed(a));
+    EXPECT_FALSE(tracer.placed(b));
+    EXPECT_FALSE(tracer.placed(c));
+    EXPECT_FALSE(tracer.placed(d));
+    // Either way a hit names its instance, and surface_at finds the same point and normal.
+    for (const auto& [id, x] : {std::pair{a, 0.7f}, std::pair{b, 5.2f}, std::pair{c, 7.2f}, std::pair{d, 300.2f}}) {
+        Hit hit;
+        ASSERT_TRUE(tracer.intersect(down_at(x, 0.1f), 0.0f, 100.0f, hit));
+        EXPECT_EQ(hit.instance, id);
+        const SurfacePoint s = surface_at(scene, down_at(x, 0.1f), hit);
+        EXPECT_NEAR(s.position.x, x - scene.origin().x, 1e-4f);
+        EXPECT_NEAR(s.geometric_normal.z, 1.0f, 1e-5f);
+    }
+    // The placed quad's corners (±1 after the scale of 2) set its rounding; an instance keeps its linear part's.
+    EXPECT_GE(tracer.rounding_scale(a), 1.0f);
+    EXPECT_EQ(tracer.rounding_scale(b), scene.instances()[b].rounding_scale);
+
+    // Moved, its triangles are re-placed: the old spot is empty and the new one hit.
+    scene.set_instance_transform(a, glm::rotate(translation(0, 3, 0), kPi / 2.0f, glm::vec3(1, 0, 0)));
+    EXPECT_EQ(&scene.ray_tracer(), &tracer);  // updated in place
+    Hit hit;
+    EXPECT_FALSE(tracer.intersect(down_at(0.7f, 0.1f), 0.0f, 100.0f, hit));
+    const Ray sideways{{0.2f, -5.0f, 0.1f}, {0.0f, 1.0f, 0.0f}};
+    ASSERT_TRUE(tracer.intersect(sideways, 0.0f, 100.0f, hit));
+    EXPECT_EQ(hit.instance, a);
+    EXPECT_NEAR(hit.t, 8.0f, 1e-4f);
+    // Flattened to zero scale it disappears, and comes back.
+    scene.set_instance_transform(a, glm::scale(translation(0, 3, 0), glm::vec3(0.0f)));
+    EXPECT_FALSE(scene.ray_tracer().intersect(sideways, 0.0f, 100.0f, hit));
+    scene.set_instance_transform(a, glm::rotate(translation(0, 3, 0), kPi / 2.0f, glm::vec3(1, 0, 0)));
+    EXPECT_TRUE(scene.ray_tracer().intersect(sideways, 0.0f, 100.0f, hit));
+}
+
 TEST(Instancing, EveryInstanceOfAnEmissiveMeshEmits) {
     Scene one, many;
     for (Scene* scene : {&one, &many}) {
