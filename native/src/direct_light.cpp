@@ -119,6 +119,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     const glm::vec3 side = transmission ? -b.ng : b.ng;  // light must arrive on this side of the surface
     const bool mis = transmission || b.directional();
     const glm::vec3 origin = offset_ray_origin(x, side, rounding_scale);
+    const RayTracer& tracer = scene.ray_tracer();
     glm::vec3 sum(0.0f);
     bool any_area = false;
     const bool world_constant = sources.world().constant();
@@ -138,6 +139,33 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         const StrataGrid grid = strata_grid(n);
         glm::vec3 light_sum(0.0f);
         const bool sequenced = sequences.light != nullptr && sources.is_world(l) && !world_constant;
+        // Each sample's direction, value and weight first, then their shadow rays, summed in the samples' order as
+        // one by one. Towards a lamp (from one point to one small region) they are coherent and go as a packet:
+        // the atrium's direct light (sun and sky) took 0.9 of the time so. The sky's directions spread over the
+        // hemisphere, where a packet took 1.2 times as long as single rays: those go one by one.
+        const bool coherent = !sources.is_world(l);
+        Ray shadow[RayTracer::kPacketRays];
+        float t_min[RayTracer::kPacketRays], t_max[RayTracer::kPacketRays];
+        glm::vec3 value[RayTracer::kPacketRays];
+        float scale[RayTracer::kPacketRays];
+        int pending = 0;
+        const auto trace_pending = [&] {
+            if (transparency) {
+                for (int j = 0; j < pending; ++j) {
+                    const glm::vec3 t = shadow_transmittance(scene, shadow[j], t_max[j], true);
+                    if (!is_black(t)) light_sum += value[j] * t * scale[j];
+                }
+            } else if (!coherent) {
+                for (int j = 0; j < pending; ++j)
+                    if (!tracer.occluded(shadow[j], t_min[j], t_max[j], kShadowRays)) light_sum += value[j] * scale[j];
+            } else {
+                bool blocked[RayTracer::kPacketRays];
+                tracer.occluded(shadow, t_min, t_max, pending, kShadowRays, blocked);
+                for (int j = 0; j < pending; ++j)
+                    if (!blocked[j]) light_sum += value[j] * scale[j];
+            }
+            pending = 0;
+        };
         for (int k = 0; k < n; ++k) {
             float u1 = rng.uniform(), u2 = rng.uniform();
             float u3 = rng.uniform();
@@ -159,22 +187,25 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                                          : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
             if (is_black(f)) continue;
             ++rays;
-            // Stop just short of the light's own point so the light's surroundings still shadow it.
-            const glm::vec3 t = shadow_transmittance(scene, Ray{origin, in.wi}, in.distance * (1.0f - 1e-4f), transparency);
-            if (is_black(t)) continue;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
             const float w = (delta || !weighted)
                                 ? 1.0f
                                 : (probes == n ? power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set))
                                                : power_heuristic(float(n) * in.pdf, float(probes) * bsdf_pdf(b, in.wi, set)));
-            light_sum += f * in.value * t * (cos_shading * w);
+            // Stop just short of the light's own point so the light's surroundings still shadow it.
+            shadow[pending] = Ray{origin, in.wi};
+            t_min[pending] = 0.0f;
+            t_max[pending] = in.distance * (1.0f - 1e-4f);
+            value[pending] = f * in.value;
+            scale[pending] = cos_shading * w;
+            if (++pending == RayTracer::kPacketRays) trace_pending();
         }
+        trace_pending();
         sum += light_sum / static_cast<float>(n);
     }
     if (!((mis && any_area) || world_sampled)) return sum;
 
     // The BSDF's own directions, each adding the first emitter it meets, weighted against light sampling.
-    const RayTracer& tracer = scene.ray_tracer();
     const int m = probes;
     glm::vec3 bsdf_sum(0.0f);
     const StrataGrid probe_grid = strata_grid(m);

@@ -20,7 +20,8 @@
     X(rtcReleaseScene) X(rtcGetSceneBounds) X(rtcNewGeometry) X(rtcSetNewGeometryBuffer)                   \
     X(rtcSetGeometryMask) X(rtcSetGeometryInstancedScene) X(rtcSetGeometryTimeStepCount)                   \
     X(rtcSetGeometryTransform) X(rtcCommitGeometry) X(rtcAttachGeometryByID) X(rtcReleaseGeometry)         \
-    X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1) X(rtcUpdateGeometryBuffer)
+    X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1) X(rtcUpdateGeometryBuffer)   \
+    X(rtcIntersect8) X(rtcOccluded8)
 
 namespace ps {
 

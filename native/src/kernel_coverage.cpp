@@ -33,22 +33,27 @@ struct ProbeHit {
     float t = 0.0f;
 };
 
-ProbeHit probe(const Scene& scene, const glm::vec3& start, const glm::vec3& down, float length,
-               const glm::vec3& normal, float cos_tolerance) {
-    const RayTracer& tracer = scene.ray_tracer();
-    const Ray ray{start, down};
-    float t_min = 0.0f;
-    for (int crossing = 0; crossing <= kMaxSpecularCrossings; ++crossing) {
-        Hit hit;
-        if (!tracer.intersect(ray, t_min, length, hit, kIndirectRays)) return {};
-        const SurfacePoint s = surface_at(scene, ray, hit);
-        if (!s.material->is_specular() && !s.material->transmits) {
-            const float cosine = glm::dot(s.geometric_normal, normal);
+// The probe along `ray` (of `length`) from its first hit on: past specular surfaces to the surface it finds.
+ProbeHit probe_from(const Scene& scene, const Ray& ray, Hit hit, float length, const glm::vec3& normal,
+                    float cos_tolerance) {
+    for (int crossing = 0;; ++crossing) {
+        // Only the material and the geometric normal matter here, not the whole shading point (surface_at).
+        const Instance& instance = scene.instances()[hit.instance];
+        const MeshData& mesh = scene.meshes()[instance.mesh];
+        const Material& material = scene.materials()[mesh.materials[hit.triangle]];
+        if (!material.is_specular() && !material.transmits) {
+            const glm::vec3& p0 = mesh.positions[mesh.indices[3 * size_t(hit.triangle)]];
+            const glm::vec3& p1 = mesh.positions[mesh.indices[3 * size_t(hit.triangle) + 1]];
+            const glm::vec3& p2 = mesh.positions[mesh.indices[3 * size_t(hit.triangle) + 2]];
+            glm::vec3 ng = glm::normalize(instance.normal_to_world * glm::cross(p1 - p0, p2 - p0));
+            if (glm::dot(ng, ray.direction) >= 0.0f) ng = -ng;  // the side the probe came from, as surface_at
+            const float cosine = glm::dot(ng, normal);
             return cosine > cos_tolerance ? ProbeHit{cosine, hit.t} : ProbeHit{};
         }
-        t_min = std::nextafter(hit.t, length) + 1e-6f * length;  // just past the specular surface
+        if (crossing == kMaxSpecularCrossings) return {};
+        const float t_min = std::nextafter(hit.t, length) + 1e-6f * length;  // just past the specular surface
+        if (!scene.ray_tracer().intersect(ray, t_min, length, hit, kIndirectRays)) return {};
     }
-    return {};
 }
 
 // Probe k lies in the k-th of kCoverageProbes equal-area rings of the tangent disc, at a random radius within it
@@ -85,18 +90,32 @@ float sample_coverage(const Scene& scene, const ViewSample& s, const glm::vec3& 
     const glm::vec3 x = s.position + origin;
     glm::vec3 tangent, bitangent;
     orthonormal_basis(s.normal, tangent, bitangent);
-    float area = 0.0f;
+    // The probes are parallel and side by side: their first hits are traced as one packet.
+    static_assert(kCoverageProbes <= RayTracer::kPacketRays, "one packet holds a sample's probes");
+    Ray rays[kCoverageProbes];
+    float t_min[kCoverageProbes], length[kCoverageProbes], rho2[kCoverageProbes];
     for (int k = 0; k < kCoverageProbes; ++k) {
         const glm::vec2 d = r * pattern.offset[k];
-        const float rho2 = glm::dot(d, d);
+        rho2[k] = glm::dot(d, d);
         // The kernel is a ball: at distance ρ from its centre it reaches h above and below the plane.
-        const float h = std::sqrt(std::max(r * r - rho2, 0.0f));
+        const float h = std::sqrt(std::max(r * r - rho2[k], 0.0f));
         const glm::vec3 q = x + d.x * tangent + d.y * bitangent;
-        const ProbeHit hit = probe(scene, q + h * s.normal, -s.normal, 2.0f * h, s.normal, params.cos_normal_tolerance);
+        rays[k] = Ray{q + h * s.normal, -s.normal};
+        t_min[k] = 0.0f;
+        length[k] = 2.0f * h;
+    }
+    Hit first[kCoverageProbes];
+    bool found[kCoverageProbes];
+    scene.ray_tracer().intersect(rays, t_min, length, kCoverageProbes, kIndirectRays, first, found);
+    float area = 0.0f;
+    for (int k = 0; k < kCoverageProbes; ++k) {
+        if (!found[k]) continue;
+        const ProbeHit hit = probe_from(scene, rays[k], first[k], length[k], s.normal, params.cos_normal_tolerance);
         if (hit.cosine == 0.0f) continue;
+        const float h = 0.5f * length[k];
         const float height = h - hit.t;  // of the surface found, above the tangent plane
         const float weight =
-            pattern.uniform ? 1.0f : std::max(2.0f * (1.0f - (rho2 + height * height) / (r * r)), 0.0f);
+            pattern.uniform ? 1.0f : std::max(2.0f * (1.0f - (rho2[k] + height * height) / (r * r)), 0.0f);
         area += weight / hit.cosine;
     }
     return pattern.plane > 0.0f ? std::max(area / pattern.plane, kMinCoverage) : 1.0f;

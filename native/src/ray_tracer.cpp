@@ -346,4 +346,87 @@ bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t
     return r.tfar == -std::numeric_limits<float>::infinity();
 }
 
+// A packet of up to 8 rays for Embree: the lanes past the count and the rays clip_to_scene refuses are inactive.
+struct RayTracer::Packet {
+    alignas(32) int valid[RayTracer::kPacketRays];
+    float shift[RayTracer::kPacketRays];
+    Ray ray[RayTracer::kPacketRays];
+    float lo[RayTracer::kPacketRays], hi[RayTracer::kPacketRays];
+};
+
+namespace {
+
+template <typename EmbreeRay8>
+void fill(const RayTracer::Packet& packet, uint32_t visibility, EmbreeRay8& r) {
+    for (int i = 0; i < RayTracer::kPacketRays; ++i) {
+        const bool active = packet.valid[i] != 0;
+        r.org_x[i] = active ? packet.ray[i].origin.x : 0.0f;
+        r.org_y[i] = active ? packet.ray[i].origin.y : 0.0f;
+        r.org_z[i] = active ? packet.ray[i].origin.z : 0.0f;
+        r.dir_x[i] = active ? packet.ray[i].direction.x : 0.0f;
+        r.dir_y[i] = active ? packet.ray[i].direction.y : 0.0f;
+        r.dir_z[i] = active ? packet.ray[i].direction.z : 1.0f;
+        r.tnear[i] = active ? packet.lo[i] : 0.0f;
+        r.tfar[i] = active ? packet.hi[i] : -1.0f;
+        r.time[i] = 0.0f;
+        r.mask[i] = visibility;
+        r.id[i] = static_cast<unsigned>(i);
+        r.flags[i] = 0;
+    }
+}
+
+}  // namespace
+
+void RayTracer::clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const {
+    for (int i = 0; i < kPacketRays; ++i) {
+        packet.shift[i] = 0.0f;
+        bool active = false;
+        if (i < count) {
+            packet.lo[i] = t_min[i];
+            packet.hi[i] = t_max[i];
+            active = clip_to_scene(rays[i], packet.lo[i], packet.hi[i], packet.ray[i], packet.shift[i]);
+        }
+        packet.valid[i] = active ? -1 : 0;
+    }
+}
+
+void RayTracer::intersect(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
+                          Hit* hits, bool* found) const {
+    Packet packet;
+    clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
+    RTCRayHit8 rh;
+    fill(packet, visibility, rh.ray);
+    for (int i = 0; i < kPacketRays; ++i) {
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    impl_->rtc.rtcIntersect8(packet.valid, impl_->top, &context, &rh);
+    for (int i = 0; i < std::min(count, kPacketRays); ++i) {
+        found[i] = packet.valid[i] != 0 && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+        if (!found[i]) continue;
+        hits[i].t = rh.ray.tfar[i] + packet.shift[i];
+        hits[i].instance = rh.hit.instID[0][i] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0][i] : rh.hit.geomID[i];
+        hits[i].triangle = rh.hit.primID[i];
+        hits[i].u = rh.hit.u[i];
+        hits[i].v = rh.hit.v[i];
+    }
+}
+
+void RayTracer::occluded(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
+                         bool* blocked) const {
+    Packet packet;
+    clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
+    RTCRay8 r;
+    fill(packet, visibility, r);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    impl_->rtc.rtcOccluded8(packet.valid, impl_->top, &context, &r);
+    for (int i = 0; i < std::min(count, kPacketRays); ++i)
+        blocked[i] = packet.valid[i] != 0 && r.tfar[i] == -std::numeric_limits<float>::infinity();
+}
+
 }  // namespace ps

@@ -37,6 +37,15 @@ public:
     bool intersect(const Ray& ray, float t_min, float t_max, Hit& hit, uint32_t rays = 7u) const;
     // True when anything visible to `rays` lies between t_min and t_max along the ray.
     bool occluded(const Ray& ray, float t_min, float t_max, uint32_t rays = 7u) const;
+    // Up to kPacketRays rays at once (Embree's ray packets): as intersect and occluded for each, faster where
+    // the rays are coherent (from one point towards one light, or parallel and side by side). Results are
+    // those of the single-ray calls.
+    static constexpr int kPacketRays = 8;
+    struct Packet;  // the rays of one packet call, clipped (ray_tracer.cpp)
+    void intersect(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility, Hit* hits,
+                   bool* found) const;
+    void occluded(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
+                  bool* blocked) const;
     // Applies new transforms of the listed instances (already stored in `instances`): re-places their triangles
     // or moves their instance, and recommits. Not thread-safe against concurrent queries.
     void update_instances(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances,
@@ -56,6 +65,7 @@ private:
     void measure_reach(const std::vector<Instance>& instances);
     void place_triangles(const MeshData& mesh, const Instance& instance, uint32_t id);
     bool clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const;
+    void clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const;
 
     struct Impl;
     Impl* impl_;
