@@ -17,6 +17,7 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/image.h"
 #include "photonsplat/memory_budget.h"
+#include "photonsplat/ray_floor.h"
 #include "photonsplat/render.h"
 #include "photonsplat/scene.h"
 
@@ -279,6 +280,26 @@ PYBIND11_MODULE(_core, m) {
           "Cancelled). settings.iterations != 1 or a time_limit render progressively (the mean of the "
           "iterations); a cancel after the first iteration returns the mean so far with "
           "stats['values']['cancelled'] = 1.");
+
+    m.def(
+        "ray_floor",
+        [](const ps::Scene& scene, const ps::Camera& camera) {
+            ps::RayFloor floor;
+            {
+                py::gil_scoped_release release;
+                floor = ps::measure_ray_floor(scene, camera);
+            }
+            py::dict out;
+            out["rays"] = floor.rays;
+            out["seconds"] = floor.seconds;
+            out["hits"] = floor.hits;
+            out["rays_per_second"] = floor.seconds > 0.0 ? double(floor.rays) / floor.seconds : 0.0;
+            return out;
+        },
+        "scene"_a, "camera"_a,
+        "Embree's floor for this frame: its primary rays (one per pixel centre) traced as coherent 4 x 2 packets, "
+        "nothing shaded. Returns {'rays', 'seconds', 'hits', 'rays_per_second'}; a render's stats['counters'] "
+        "holds each stage's 'rays.<stage>' to compare with it. Builds the BVH first if needed, outside the time.");
 
     m.def("default_memory_budget", &ps::default_memory_budget,
           "Bytes a render may hold when RenderSettings.memory_budget is 0: 3/4 of available memory.");

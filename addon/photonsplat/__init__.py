@@ -39,6 +39,7 @@ try:
         psnr,
         relmse,
         default_memory_budget,
+        ray_floor,
         render,
         render_reference,
         rmse,

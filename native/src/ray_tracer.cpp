@@ -14,10 +14,13 @@
 
 #include "embree_api.h"
 #include "photonsplat/scene.h"
+#include "photonsplat/stats.h"
 
 namespace ps {
 
 namespace {
+
+constexpr double kReach = 1e17;  // how far from an instance's origin a ray may start: inside Embree's 1.8e18
 
 // Embree asserts (aborting the process, Blender with it) on a ray with a non-finite or huge origin or direction,
 // or a negative or inverted range. Scene validation keeps such rays from being made; this is the last guard.
@@ -255,6 +258,9 @@ void RayTracer::measure_reach(const std::vector<Instance>& instances) {
         reach_scale_ = std::max(reach_scale_, scale);
         reach_offset_ = std::max(reach_offset_, scale * glm::length(glm::dvec3(glm::vec3(instance.to_world[3]))));
     }
+    // Origins within this coordinate are reachable for certain (clip_to_scene), with a margin for its rounding.
+    near_enough_ = reach_scale_ > 0.0 ? float(0.5 * (kReach - reach_offset_) / (reach_scale_ * std::sqrt(3.0))) : 1e17f;
+    if (!(near_enough_ > 0.0f)) near_enough_ = 0.0f;
     RTCBounds bounds;
     impl_->rtc.rtcGetSceneBounds(impl_->top, &bounds);
     scene_lo_ = glm::vec3(bounds.lower_x, bounds.lower_y, bounds.lower_z);
@@ -268,8 +274,9 @@ void RayTracer::measure_reach(const std::vector<Instance>& instances) {
 bool RayTracer::clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const {
     if (!embree_accepts(original, t_min, t_max)) return false;
     ray = original;
-    constexpr double kReach = 1e17;  // an order of magnitude inside Embree's limit
     const auto reachable = [&](const glm::vec3& o) {
+        if (std::fabs(o.x) <= near_enough_ && std::fabs(o.y) <= near_enough_ && std::fabs(o.z) <= near_enough_)
+            return true;  // every ray of an ordinary scene: one comparison a coordinate
         const double far = std::max(std::fabs(double(o.x)), std::max(std::fabs(double(o.y)), std::fabs(double(o.z))));
         return reach_scale_ * std::sqrt(3.0) * far + reach_offset_ <= kReach;
     };
@@ -318,6 +325,7 @@ bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hi
     Ray ray;
     float shift = 0.0f;
     if (!clip_to_scene(original, t_min, t_max, ray, shift)) return false;
+    count_rays(1);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -339,6 +347,7 @@ bool RayTracer::occluded(const Ray& original, float t_min, float t_max, uint32_t
     Ray ray;
     float shift = 0.0f;
     if (!clip_to_scene(original, t_min, t_max, ray, shift)) return false;
+    count_rays(1);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay r = embree_ray(ray, t_min, t_max, rays);
@@ -394,6 +403,7 @@ void RayTracer::intersect(const Ray* rays, const float* t_min, const float* t_ma
                           Hit* hits, bool* found) const {
     Packet packet;
     clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
+    count_rays(static_cast<uint64_t>(std::max(0, std::min(count, kPacketRays))));
     RTCRayHit8 rh;
     fill(packet, visibility, rh.ray);
     for (int i = 0; i < kPacketRays; ++i) {
@@ -419,6 +429,7 @@ void RayTracer::occluded(const Ray* rays, const float* t_min, const float* t_max
                          bool* blocked) const {
     Packet packet;
     clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
+    count_rays(static_cast<uint64_t>(std::max(0, std::min(count, kPacketRays))));
     RTCRay8 r;
     fill(packet, visibility, r);
     RTCIntersectContext context;

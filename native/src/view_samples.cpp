@@ -69,6 +69,9 @@ struct PixelPaths {
     std::vector<CameraPath> pending;  // branches started at the split, traced after the current path
     uint32_t next_branch = 1;
     uint64_t rays = 0;
+    // The camera ray's first hit, traced beforehand with its neighbours' as a packet; used once.
+    const Hit* first_hit = nullptr;
+    bool first_found = false;
 };
 
 // Emitters met by a ray that left a rough transmission were that vertex's next-event estimation's, whose own
@@ -119,10 +122,16 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         // The first segment sees what is visible to the camera, up to its far clip; later ones what is visible
         // to indirect rays.
         const bool from_camera = path.depth == 0;
-        const bool found = tracer.intersect(ray, 0.0f,
-                                            from_camera ? p.camera.far_distance(ray)
-                                                        : std::numeric_limits<float>::infinity(),
-                                            hit, from_camera ? kCameraRays : kIndirectRays);
+        bool found;
+        if (from_camera && p.first_hit != nullptr) {
+            found = p.first_found;
+            if (found) hit = *p.first_hit;
+            p.first_hit = nullptr;
+        } else {
+            found = tracer.intersect(ray, 0.0f,
+                                     from_camera ? p.camera.far_distance(ray) : std::numeric_limits<float>::infinity(),
+                                     hit, from_camera ? kCameraRays : kIndirectRays);
+        }
         // Lights with a size, seen in mirrors, through glass and rough transmission (Cycles' camera rays do not
         // see lights themselves).
         if (!path.camera_ray && !path.after_lobe && p.sources != nullptr) {
@@ -288,7 +297,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     std::vector<std::vector<ViewSample>> band_samples(static_cast<size_t>(bands));
     std::vector<std::vector<Lobe>> band_lobes(static_cast<size_t>(bands));
     std::atomic<uint64_t> extra_rays{0};
-    scene.ray_tracer();  // build the BVH once, before the threads need it
+    const RayTracer& tracer = scene.ray_tracer();  // built once, before the threads need it
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> rows_done{0};
     tbb::parallel_for(tbb::blocked_range<int>(0, bands), [&](const tbb::blocked_range<int>& range) {
@@ -304,34 +313,48 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             const int y_end = std::min(height, (band + 1) * kBandRows);
             found.reserve(static_cast<size_t>(y_end - band * kBandRows) * static_cast<size_t>(width));
             for (int y = band * kBandRows; y < y_end; ++y) {
-                for (int x = 0; x < width; ++x) {
-                    const size_t pixel = static_cast<size_t>(y) * width + x;
-                    Rng rng(settings.seed, RngDomain::camera, pixel);
-                    float jx = 0.5f, jy = 0.5f;
-                    if (settings.jitter) {
-                        Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
-                        jx = jitter.uniform();
-                        jy = jitter.uniform();
+                // The row's camera rays go in packets of side-by-side pixels, whose first hits are traced together.
+                for (int x0 = 0; x0 < width; x0 += RayTracer::kPacketRays) {
+                    const int count = std::min(RayTracer::kPacketRays, width - x0);
+                    Ray camera_rays[RayTracer::kPacketRays];
+                    float t_min[RayTracer::kPacketRays], t_max[RayTracer::kPacketRays];
+                    Hit first_hits[RayTracer::kPacketRays];
+                    bool first_found[RayTracer::kPacketRays];
+                    for (int k = 0; k < count; ++k) {
+                        const size_t pixel = static_cast<size_t>(y) * width + x0 + k;
+                        float jx = 0.5f, jy = 0.5f;
+                        if (settings.jitter) {
+                            Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
+                            jx = jitter.uniform();
+                            jy = jitter.uniform();
+                        }
+                        camera_rays[k] = camera.generate_ray(static_cast<float>(x0 + k) + jx, static_cast<float>(y) + jy);
+                        t_min[k] = 0.0f;
+                        t_max[k] = camera.far_distance(camera_rays[k]);
                     }
-                    const CameraPath start{
-                        camera.generate_ray(static_cast<float>(x) + jx, static_cast<float>(y) + jy), glm::vec3(1.0f), 0};
-                    FirstHit first;
-                    const size_t before = found.size();
-                    PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel), rng,
-                                     found, found_lobes, out.emission[pixel],
-                                     out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel], first,
-                                     {}, 1, 0};
-                    trace_camera_path(paths, start);
-                    while (!paths.pending.empty()) {
-                        const CameraPath branch = paths.pending.front();
-                        paths.pending.erase(paths.pending.begin());
-                        trace_camera_path(paths, branch);
+                    tracer.intersect(camera_rays, t_min, t_max, count, kCameraRays, first_hits, first_found);
+                    for (int k = 0; k < count; ++k) {
+                        const size_t pixel = static_cast<size_t>(y) * width + x0 + k;
+                        Rng rng(settings.seed, RngDomain::camera, pixel);
+                        const CameraPath start{camera_rays[k], glm::vec3(1.0f), 0};
+                        FirstHit first;
+                        const size_t before = found.size();
+                        PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel),
+                                         rng, found, found_lobes, out.emission[pixel],
+                                         out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel],
+                                         first, {}, 1, 0, &first_hits[k], first_found[k]};
+                        trace_camera_path(paths, start);
+                        while (!paths.pending.empty()) {
+                            const CameraPath branch = paths.pending.front();
+                            paths.pending.erase(paths.pending.begin());
+                            trace_camera_path(paths, branch);
+                        }
+                        rays += paths.rays;
+                        for (size_t j = before; j < found.size(); ++j) found[j].position -= out.origin;
+                        out.alpha[pixel] = first.alpha;
+                        out.first_normal[pixel] = first.normal;
+                        out.first_depth[pixel] = first.depth;
                     }
-                    rays += paths.rays;
-                    for (size_t k = before; k < found.size(); ++k) found[k].position -= out.origin;
-                    out.alpha[pixel] = first.alpha;
-                    out.first_normal[pixel] = first.normal;
-                    out.first_depth[pixel] = first.depth;
                 }
             }
             band_samples[static_cast<size_t>(band)].assign(found.begin(), found.end());

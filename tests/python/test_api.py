@@ -30,6 +30,25 @@ def test_render_returns_an_image_and_stats():
     assert stats["values"]["radius"] > 0
 
 
+def test_stages_report_their_rays_beside_embrees_floor():
+    scene, camera = cornell_box(), cornell_camera()
+    _, stats = ps.render(scene, camera, ps.RenderSettings(photons=20000, direct_samples=4))
+    rays = stats["counters"]
+    pixels = camera.width * camera.height
+    # Every pixel's camera ray at least; four shadow rays per view sample towards the one light, less those the
+    # light's side turns away; eight coverage probes per probed sample; a ray per photon segment.
+    assert rays["rays.view_samples"] >= pixels
+    assert pixels < rays["rays.direct_light"] <= 4 * stats["counters"]["view_samples"] * 2
+    assert rays["rays.kernel_coverage"] >= 8 * pixels / 2
+    assert rays["rays.photon_trace"] >= 20000
+    assert rays["rays.total"] >= sum(rays[f"rays.{s}"] for s in ("view_samples", "direct_light", "photon_trace"))
+    floor = ps.ray_floor(scene, camera)
+    assert floor["rays"] == pixels and 0 < floor["hits"] <= pixels
+    assert floor["seconds"] > 0 and floor["rays_per_second"] > 0
+    with pytest.raises(TypeError):
+        ps.ray_floor(scene, None)
+
+
 def test_passes_add_up_to_the_image():
     image, _, passes = ps.render(cornell_box(), cornell_camera(16, 16), ps.RenderSettings(photons=5000), passes=True)
     total = passes["emission"] + passes["direct"] + passes["indirect"]

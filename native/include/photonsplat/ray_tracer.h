@@ -73,6 +73,7 @@ private:
     std::vector<float> rounding_;    // per instance, rounding_scale()
     std::vector<uint8_t> placed_;    // per instance, placed()
     double reach_scale_ = 0.0, reach_offset_ = 0.0;
+    float near_enough_ = 0.0f;  // origins with every coordinate within this are reachable (clip_to_scene)
     glm::vec3 scene_lo_{0.0f}, scene_hi_{0.0f};  // the top level's bounds, render space
 };
 
