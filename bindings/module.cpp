@@ -276,7 +276,7 @@ PYBIND11_MODULE(_core, m) {
           "with passes=True also a dict of the film outputs settings.outputs asks for beyond combined ('emission', "
           "'direct', 'indirect', 'normal' (H, W, 3), 'depth' (H, W, 1) by default) and, with "
           "settings.caustics_pass, 'caustics' (H, W, 3); without it only combined is made. progress(stage, "
-          "fraction) is called about 10× a second on the calling thread; returning True cancels (raises "
+          "fraction) is called about 40× a second on the calling thread; returning True cancels (raises "
           "Cancelled). settings.iterations != 1 or a time_limit render progressively (the mean of the "
           "iterations); a cancel after the first iteration returns the mean so far with "
           "stats['values']['cancelled'] = 1.");

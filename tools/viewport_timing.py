@@ -70,17 +70,19 @@ def measure_moves(session, ob, label):
     return rows
 
 
-def measure_busy_waits(session, ob):
-    """Moves `ob` while a refinement pass is running (1 s after the previous move), as a drag does: how long
-    view_update waits on the main thread for that pass to stop before the scene changes in place."""
+def measure_busy_waits(session, ob, steps=1):
+    """Moves `ob` while a refinement pass is running (1 s after the previous move), as a drag does (`steps`
+    moves 50 ms apart, each landing in the pass the previous one started): how long view_update waits on the
+    main thread for that pass to stop before the scene changes in place, per step."""
     waits = []
     for move in range(MOVES):
         yield 1.0
-        ob.location.x += 0.05 if move % 2 == 0 else -0.05
-        yield 0.05
-        waits.append(session.release_seconds)
-        print(f"viewport_timing: move during a pass {move + 1}: main thread waited "
-              f"{session.release_seconds * 1000:.0f} ms (scene rebuilt {session.last_sync.rebuilt})")
+        for step in range(steps):
+            ob.location.x += 0.01 if move % 2 == 0 else -0.01
+            yield 0.05
+            waits.append(session.release_seconds)
+            print(f"viewport_timing: {ob.name} moved during a pass {move + 1}.{step + 1}: main thread waited "
+                  f"{session.release_seconds * 1000:.0f} ms (scene rebuilt {session.last_sync.rebuilt})")
     return waits
 
 
@@ -99,6 +101,7 @@ def steps():
     light_rows = yield from measure_moves(session, bpy.data.objects["Light"], "light move")
     object_rows = yield from measure_moves(session, bpy.data.objects["GlassSphere"], "object move")
     busy_waits = yield from measure_busy_waits(session, bpy.data.objects["Light"])
+    drag_waits = yield from measure_busy_waits(session, bpy.data.objects["GlassSphere"], steps=5)
 
     settings = scene.photonsplat
     summary = dict(
@@ -109,7 +112,7 @@ def steps():
         refined_median_s=statistics.median(r["refined_s"] for r in light_rows),
         object_first_image_median_s=statistics.median(r["first_image_s"] for r in object_rows),
         object_refined_median_s=statistics.median(r["refined_s"] for r in object_rows),
-        busy_main_thread_waits_s=busy_waits,
+        busy_main_thread_waits_s=busy_waits, drag_main_thread_waits_s=drag_waits,
         settings=dict(first_pass_photons=settings.viewport_preview_photons,
                       first_pass_pixel_size=settings.viewport_preview_divider,
                       photons_per_iteration=settings.viewport_photons, refined_iterations=REFINED_ITERATIONS,
@@ -120,7 +123,8 @@ def steps():
           f" refined ({REFINED_ITERATIONS} iterations) {summary['refined_median_s']:.2f} s after a light move; object move:"
           f" first image {summary['object_first_image_median_s'] * 1000:.0f} ms,"
           f" refined {summary['object_refined_median_s']:.2f} s; main-thread wait during a pass: max"
-          f" {max(busy_waits) * 1000:.0f} ms (medians of {MOVES}; load average"
+          f" {max(busy_waits) * 1000:.0f} ms, dragging the glass sphere: max {max(drag_waits) * 1000:.0f} ms"
+          f" (medians of {MOVES}; load average"
           f" {summary['load_average'][0]:.1f}); {OUTPUT}")
 
 

@@ -180,7 +180,7 @@ class PhotonSplatRenderEngine(bpy.types.RenderEngine):
             else:
                 _write_pixels(result, frame, progressive.image())
                 self.update_result(result)
-                # An iteration shorter than the core's progress poll (0.1 s) never asks: ask between them too.
+                # An iteration shorter than the core's progress poll (25 ms) never asks: ask between them too.
                 cancelled = self._cancel_requested()
         stats = progressive.stats()
         if cancelled:

@@ -2,7 +2,7 @@
 until a pass count or time limit. No bpy here: Blender's viewport (viewport.py) and the tests drive it alike.
 
 The native calls release the GIL, so Blender's UI keeps running while a pass renders. Stopping never blocks:
-stop() raises a flag that the core's progress callback returns (polled ~10x a second), the pass raises
+stop() raises a flag that the core's progress callback returns (polled every 25 ms), the pass raises
 Cancelled and the thread ends by itself; a restarted view simply starts a new Refinement.
 """
 

@@ -24,7 +24,7 @@ from . import export, refine
 _sessions = weakref.WeakSet()
 
 # Longest wait on Blender's main thread for a refinement to stop before its scene is changed in place (a
-# cancelled pass ends within ~0.1 s; an Embree build in progress may take longer, then a new scene is built).
+# cancelled pass ends within ~25 ms, one progress poll; an Embree build in progress may take longer, then a new scene is built).
 RELEASE_WAIT = 0.5
 
 
@@ -124,7 +124,7 @@ class ViewportSession:
     def _release_scene(self):
         """Before the sync changes the core scene in place (moved objects, lights): the running refinement
         must be done with it. Stops it and waits up to RELEASE_WAIT s on the main thread (a pass polls its
-        cancel flag about 10x a second); False when it is still running, and the sync builds a new scene."""
+        cancel flag every 25 ms); False when it is still running, and the sync builds a new scene."""
         self.release_seconds = 0.0
         if self.refinement is None:
             return True
