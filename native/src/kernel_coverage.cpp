@@ -129,6 +129,12 @@ bool alike(const ViewSample& a, const ViewSample& b, float radius) {
            glm::dot(d, d) < 0.0625f * radius * radius;
 }
 
+// Every kGridStep-th column and row is probed. At 3 the probe rays are 0.57 of a grid of 2 on the atrium at
+// 1080p (0.26 of probing every pixel; a pixel whose grid neighbours are not alike is probed too), and the 64-pass
+// images keep an SSIM of 0.9987 (Cornell box) and 0.998 (atrium) against the checkerboard's of db0ead1
+// (tools/progressive_ssim.py, 480 x 270); 4 saved little more (more pixels fell back to probing).
+constexpr int kGridStep = 3;
+
 template <typename Body>
 bool for_each_sample(size_t count, const RenderControl& control, const Body& body) {
     std::atomic<bool> cancelled{false};
@@ -154,11 +160,10 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // spheres) dividing by the coverage brightened their lit tops and lowered the SSIM of every iteration
     // (docs/results/README.md, "Boundary correction").
     const auto probed = [&](size_t i) { return !(samples.samples[i].flags & kGlossy); };
-    // The coverage changes over the kernel's width, many pixels wide: a quarter of the samples (the pixels of
-    // even column and even row) are probed, and the others take the bilinear blend of their nearest probed
-    // pixels, among those on the same flat surface (alike), where there is one; the rest are probed. Half as
-    // many probe rays as the checkerboard this replaced, at an SSIM of the 64-pass image against it of at least
-    // 0.99 (docs/benchmarks.md).
+    // The coverage changes over the kernel's width, many pixels wide: only the pixels of a grid (every
+    // kGridStep-th column and row) are probed, and the others take the bilinear blend of the four grid pixels
+    // around them, among those on the same flat surface (alike); where none is, they are probed too.
+    const int step = kGridStep;
     const int width = samples.width, height = samples.height;
     std::vector<uint32_t> first_sample(static_cast<size_t>(width) * height, UINT32_MAX);
     stats.bytes["kernel_coverage"] = static_cast<double>(coverage.capacity() * sizeof(float) +
@@ -167,7 +172,7 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // Probed directly: a pixel's further samples (its branches at glass) and the grid's pixels.
     const auto on_grid = [&](size_t i) {
         const ViewSample& s = samples.samples[i];
-        return first_sample[s.pixel] != i || ((s.pixel % width) % 2 == 0 && (s.pixel / width) % 2 == 0);
+        return first_sample[s.pixel] != i || ((s.pixel % width) % step == 0 && (s.pixel / width) % step == 0);
     };
     std::atomic<uint64_t> probes{0};
     bool done = for_each_sample(count, control, [&](size_t i) {
@@ -179,21 +184,20 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
         if (!probed(i) || on_grid(i)) return;
         const ViewSample& s = samples.samples[i];
         const int x = static_cast<int>(s.pixel % width), y = static_cast<int>(s.pixel / width);
-        // The grid pixels around: one or two columns (x even or odd), one or two rows, equal weights.
-        const int x0 = x - x % 2, y0 = y - y % 2;
-        float sum = 0.0f;
-        int n = 0;
-        for (int gy = y0; gy <= y0 + 2 * (y % 2); gy += 2) {
-            for (int gx = x0; gx <= x0 + 2 * (x % 2); gx += 2) {
-                if (gx >= width || gy >= height) continue;
-                const uint32_t j = first_sample[static_cast<size_t>(gy) * width + gx];
-                if (j == UINT32_MAX || !probed(j) || !alike(s, samples.samples[j], params.radius)) continue;
-                sum += coverage[j];
-                ++n;
-            }
+        const int x0 = x - x % step, y0 = y - y % step;
+        const float fx = float(x % step) / float(step), fy = float(y % step) / float(step);
+        float sum = 0.0f, weights = 0.0f;
+        for (int corner = 0; corner < 4; ++corner) {
+            const int gx = x0 + (corner & 1) * step, gy = y0 + (corner >> 1) * step;
+            const float w = ((corner & 1) ? fx : 1.0f - fx) * ((corner >> 1) ? fy : 1.0f - fy);
+            if (!(w > 0.0f) || gx >= width || gy >= height) continue;
+            const uint32_t j = first_sample[static_cast<size_t>(gy) * width + gx];
+            if (j == UINT32_MAX || !probed(j) || !alike(s, samples.samples[j], params.radius)) continue;
+            sum += w * coverage[j];
+            weights += w;
         }
-        if (n > 0) {
-            coverage[i] = sum / static_cast<float>(n);
+        if (weights > 0.0f) {
+            coverage[i] = sum / weights;
         } else {
             coverage[i] = sample_coverage(scene, s, samples.origin, params, pattern);
             probes.fetch_add(kCoverageProbes, std::memory_order_relaxed);
