@@ -1,11 +1,14 @@
 #include "photonsplat/render.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "photonsplat/direct_light.h"
@@ -96,13 +99,28 @@ void correct_boundaries(const Scene& scene, const ViewSamples& samples, const Sp
         for (size_t i = 0; i < coverage.size(); ++i) (*light)[i] /= coverage[i];
 }
 
-// A per-sample light summed into its pixels (a pixel's samples add up: view_samples.h), 3 floats a pixel.
+// Runs body(first, last) over [0, pixels) in blocks, in parallel.
+template <typename Body>
+void for_pixel_blocks(size_t pixels, const Body& body) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pixels, 16384),
+                      [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+}
+
+// A per-sample light summed into its pixels (a pixel's samples add up: view_samples.h), 3 floats a pixel. The
+// samples come in pixel order, so a block of pixels owns one range of samples: blocks are summed in parallel,
+// each pixel's samples in their order (the same bits as one thread).
 std::vector<float> pixel_sums(const ViewSamples& samples, const std::vector<glm::vec3>& light, size_t pixels) {
     std::vector<float> image(pixels * 3, 0.0f);
-    for (size_t i = 0; i < samples.samples.size(); ++i) {
-        const size_t p = samples.samples[i].pixel;
-        for (int c = 0; c < 3; ++c) image[3 * p + c] += light[i][c];
-    }
+    const std::vector<ViewSample>& v = samples.samples;
+    const auto first_of = [&](size_t pixel) {
+        return std::partition_point(v.begin(), v.end(), [&](const ViewSample& s) { return s.pixel < pixel; }) - v.begin();
+    };
+    for_pixel_blocks(pixels, [&](size_t first, size_t last) {
+        for (size_t i = size_t(first_of(first)), end = size_t(first_of(last)); i < end; ++i) {
+            const size_t p = v[i].pixel;
+            for (int c = 0; c < 3; ++c) image[3 * p + c] += light[i][c];
+        }
+    });
     return image;
 }
 
@@ -113,17 +131,19 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
     const size_t pixels = static_cast<size_t>(samples.width) * samples.height;
     Film film(samples.width, samples.height, requested_outputs(settings));
     std::vector<float> emission(pixels * 3, 0.0f);
-    for (size_t p = 0; p < pixels; ++p) {
-        // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles): the
-        // background seen through glass or in mirrors stays.
-        const bool escaped = samples.alpha[p] == 0.0f;
-        if (!(settings.transparent && escaped))
-            for (int c = 0; c < 3; ++c) emission[3 * p + c] = samples.emission[p][c];
-        if (escaped) continue;
-        if (film.has(FilmOutput::normal))
-            for (int c = 0; c < 3; ++c) film[FilmOutput::normal][3 * p + c] = samples.first_normal[p][c];
-        if (film.has(FilmOutput::depth)) film[FilmOutput::depth][p] = samples.first_depth[p];
-    }
+    for_pixel_blocks(pixels, [&](size_t first, size_t last) {
+        for (size_t p = first; p < last; ++p) {
+            // With film transparency a camera ray that escapes straight to the world shows nothing (Cycles): the
+            // background seen through glass or in mirrors stays.
+            const bool escaped = samples.alpha[p] == 0.0f;
+            if (!(settings.transparent && escaped))
+                for (int c = 0; c < 3; ++c) emission[3 * p + c] = samples.emission[p][c];
+            if (escaped) continue;
+            if (film.has(FilmOutput::normal))
+                for (int c = 0; c < 3; ++c) film[FilmOutput::normal][3 * p + c] = samples.first_normal[p][c];
+            if (film.has(FilmOutput::depth)) film[FilmOutput::depth][p] = samples.first_depth[p];
+        }
+    });
     std::vector<float> direct_image = pixel_sums(samples, direct, pixels);
     // Direct light that reached the camera through rough transmission (view_samples.h) is direct light too.
     if (!samples.transmitted_direct.empty())
@@ -131,11 +151,13 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
             for (int c = 0; c < 3; ++c) direct_image[3 * p + c] += samples.transmitted_direct[p][c];
     std::vector<float> indirect_image = pixel_sums(samples, indirect, pixels);
     std::vector<float>& rgba = film[FilmOutput::combined];
-    for (size_t p = 0; p < pixels; ++p) {
-        for (int c = 0; c < 3; ++c)
-            rgba[4 * p + c] = emission[3 * p + c] + direct_image[3 * p + c] + indirect_image[3 * p + c];
-        rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
-    }
+    for_pixel_blocks(pixels, [&](size_t first, size_t last) {
+        for (size_t p = first; p < last; ++p) {
+            for (int c = 0; c < 3; ++c)
+                rgba[4 * p + c] = emission[3 * p + c] + direct_image[3 * p + c] + indirect_image[3 * p + c];
+            rgba[4 * p + 3] = settings.transparent ? samples.alpha[p] : 1.0f;
+        }
+    });
     if (film.has(FilmOutput::emission)) film[FilmOutput::emission] = std::move(emission);
     if (film.has(FilmOutput::direct)) film[FilmOutput::direct] = std::move(direct_image);
     if (film.has(FilmOutput::indirect)) film[FilmOutput::indirect] = std::move(indirect_image);
