@@ -21,7 +21,7 @@
     X(rtcSetGeometryMask) X(rtcSetGeometryInstancedScene) X(rtcSetGeometryTimeStepCount)                   \
     X(rtcSetGeometryTransform) X(rtcCommitGeometry) X(rtcAttachGeometryByID) X(rtcReleaseGeometry)         \
     X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1) X(rtcUpdateGeometryBuffer)   \
-    X(rtcIntersect8) X(rtcOccluded8)
+    X(rtcIntersect8) X(rtcOccluded8) X(rtcDetachGeometry)
 
 namespace ps {
 

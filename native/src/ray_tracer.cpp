@@ -141,61 +141,31 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
             const MeshData& mesh = meshes[instances[i].mesh];
             placed_[i] = mesh.triangle_count() > 0 && places_triangles(mesh, instances[i], users[instances[i].mesh]);
         }
-        // The object-space BVH of every mesh that some instance traces as an instance.
         impl_->meshes.assign(meshes.size(), nullptr);
-        for (uint32_t i = 0; i < instances.size(); ++i) {
-            const uint32_t m = instances[i].mesh;
-            const MeshData& mesh = meshes[m];
-            if (placed_[i] || impl_->meshes[m] || mesh.triangle_count() == 0) continue;
-            RTCScene scene = rtc.rtcNewScene(device);
-            if (!scene) throw_on_embree_error(device, "creating a mesh scene");
-            impl_->meshes[m] = scene;
-            rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-            float* vertices = nullptr;
-            RTCGeometry geometry = triangle_geometry(rtc, device, mesh, vertices);
-            for (size_t k = 0; k < mesh.positions.size(); ++k) {
-                vertices[3 * k + 0] = mesh.positions[k].x;
-                vertices[3 * k + 1] = mesh.positions[k].y;
-                vertices[3 * k + 2] = mesh.positions[k].z;
-            }
-            rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
-            rtc.rtcCommitGeometry(geometry);
-            rtc.rtcAttachGeometryByID(scene, geometry, 0);
-            rtc.rtcReleaseGeometry(geometry);
-            rtc.rtcCommitScene(scene);
-            throw_on_embree_error(device, "building a mesh BVH");
-            bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
-        }
-
         impl_->top = rtc.rtcNewScene(device);
         if (!impl_->top) throw_on_embree_error(device, "creating the scene");
         // Dynamic: a moved object rebuilds its own part and the top, not the whole scene.
         rtc.rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
         for (uint32_t i = 0; i < instances.size(); ++i) {
             const MeshData& mesh = meshes[instances[i].mesh];
-            RTCGeometry geometry = nullptr;
-            if (placed_[i]) {
-                geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
-                impl_->instances.push_back(geometry);  // owned from here on, released by ~Impl
-                place_triangles(mesh, instances[i], i);
-                bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
-            } else if (RTCScene scene = impl_->meshes[instances[i].mesh]) {
-                geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-                impl_->instances.push_back(geometry);
-                rtc.rtcSetGeometryInstancedScene(geometry, scene);
-                rtc.rtcSetGeometryTimeStepCount(geometry, 1);
-                set_instance_transform(geometry, instances[i]);
-                rounding_[i] = instances[i].rounding_scale;
-                bytes_ += sizeof(glm::mat4) + 64;  // transform + a top-level BVH node, roughly
-            } else {
+            if (mesh.triangle_count() == 0) {
                 impl_->instances.push_back(nullptr);
                 continue;
             }
-            rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
-            rtc.rtcCommitGeometry(geometry);
-            // The geometry id is the instance index: hits name their instance directly.
-            rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
-            if (is_flat(instances[i])) rtc.rtcDisableGeometry(geometry);
+            impl_->instances.push_back(nullptr);
+            if (placed_[i]) {
+                RTCGeometry geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
+                impl_->instances[i] = geometry;  // owned from here on, released by ~Impl
+                place_triangles(mesh, instances[i], i);
+                bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+                rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
+                rtc.rtcCommitGeometry(geometry);
+                // The geometry id is the instance index: hits name their instance directly.
+                rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
+                if (is_flat(instances[i])) rtc.rtcDisableGeometry(geometry);
+            } else {
+                attach_instance(meshes, instances[i], i);
+            }
         }
         rtc.rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
@@ -207,6 +177,50 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
 }
 
 RayTracer::~RayTracer() { delete impl_; }
+
+// The object-space BVH of mesh m, built on first use and shared by every instance of it.
+RTCScene RayTracer::mesh_scene(const std::vector<MeshData>& meshes, uint32_t m) {
+    if (impl_->meshes[m]) return impl_->meshes[m];
+    const EmbreeApi& rtc = impl_->rtc;
+    RTCDevice device = shared_device();
+    const MeshData& mesh = meshes[m];
+    RTCScene scene = rtc.rtcNewScene(device);
+    if (!scene) throw_on_embree_error(device, "creating a mesh scene");
+    impl_->meshes[m] = scene;
+    rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    float* vertices = nullptr;
+    RTCGeometry geometry = triangle_geometry(rtc, device, mesh, vertices);
+    for (size_t k = 0; k < mesh.positions.size(); ++k) {
+        vertices[3 * k + 0] = mesh.positions[k].x;
+        vertices[3 * k + 1] = mesh.positions[k].y;
+        vertices[3 * k + 2] = mesh.positions[k].z;
+    }
+    rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
+    rtc.rtcCommitGeometry(geometry);
+    rtc.rtcAttachGeometryByID(scene, geometry, 0);
+    rtc.rtcReleaseGeometry(geometry);
+    rtc.rtcCommitScene(scene);
+    throw_on_embree_error(device, "building a mesh BVH");
+    bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+    return scene;
+}
+
+// Puts instance `id` into the top level as an instance of its mesh's object-space BVH.
+void RayTracer::attach_instance(const std::vector<MeshData>& meshes, const Instance& instance, uint32_t id) {
+    const EmbreeApi& rtc = impl_->rtc;
+    RTCScene scene = mesh_scene(meshes, instance.mesh);
+    RTCGeometry geometry = rtc.rtcNewGeometry(shared_device(), RTC_GEOMETRY_TYPE_INSTANCE);
+    impl_->instances[id] = geometry;
+    rtc.rtcSetGeometryInstancedScene(geometry, scene);
+    rtc.rtcSetGeometryTimeStepCount(geometry, 1);
+    set_instance_transform(geometry, instance);
+    rounding_[id] = instance.rounding_scale;
+    bytes_ += sizeof(glm::mat4) + 64;  // transform + a top-level BVH node, roughly
+    rtc.rtcSetGeometryMask(geometry, instance.visibility);
+    rtc.rtcCommitGeometry(geometry);
+    rtc.rtcAttachGeometryByID(impl_->top, geometry, id);  // the id is the instance index, as placed triangles'
+    if (is_flat(instance)) rtc.rtcDisableGeometry(geometry);
+}
 
 // Writes the instance's triangles' corners in render space into its geometry's vertex buffer, and the rounding
 // they carry.
@@ -230,12 +244,18 @@ void RayTracer::update_instances(const std::vector<MeshData>& meshes, const std:
         RTCGeometry geometry = impl_->instances[i];
         if (!geometry) continue;
         if (placed_[i]) {
-            place_triangles(meshes[instances[i].mesh], instances[i], i);
-            rtc.rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
-        } else {
-            set_instance_transform(geometry, instances[i]);
-            rounding_[i] = instances[i].rounding_scale;
+            // Moved: from now on an instance of its mesh (as Cycles keeps what moves in the viewport), so that
+            // dragging it refits the top level instead of rebuilding its triangles' BVH at every step.
+            rtc.rtcDetachGeometry(impl_->top, i);
+            rtc.rtcReleaseGeometry(geometry);
+            impl_->instances[i] = nullptr;
+            impl_->placed_vertices[i] = nullptr;
+            placed_[i] = 0;
+            attach_instance(meshes, instances[i], i);
+            continue;
         }
+        set_instance_transform(geometry, instances[i]);
+        rounding_[i] = instances[i].rounding_scale;
         rtc.rtcCommitGeometry(geometry);
         if (is_flat(instances[i]))
             rtc.rtcDisableGeometry(geometry);

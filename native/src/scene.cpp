@@ -429,12 +429,13 @@ void Scene::fit_origin() {
     placed_max_ = glm::dvec3(-std::numeric_limits<double>::infinity());
     for (const Instance& instance : instances_) include_in_placed_box(instance);
     if (!recentre()) return;
-    // Every instance's render-space translation changed: the next render updates them all (a refit).
+    // Every instance's render-space translation changed: the next render builds the BVH anew, as for a new
+    // scene (updated in place, every object placed as render-space triangles would become an instance: the
+    // same picture, other rounding), so that the scene renders bit for bit as a fresh one.
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
-    if (!ray_tracer_) return;
     tracer_current_ = false;
-    moved_instances_.resize(instances_.size());
-    for (uint32_t i = 0; i < instances_.size(); ++i) moved_instances_[i] = i;
+    ray_tracer_.reset();
+    moved_instances_.clear();
 }
 
 void Scene::set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random) {

@@ -3,8 +3,8 @@
 // instanced): a ray then descends one BVH, not a top level and an instance's own, and where objects' boxes
 // overlap (a room's walls, floor and furniture) it is not restarted in every instance it enters. That traced
 // the atrium's direct light in 0.60 of the time (docs/benchmarks.md). A mesh shown by several instances keeps
-// one BVH in object space, built and stored once, under an instance of it. The scene is Embree's dynamic kind:
-// moving an object rebuilds its own part (its triangles re-placed, or its instance's transform) and the top.
+// one BVH in object space, built and stored once, under an instance of it, and so does an object once it has
+// moved (the viewport's edits): moving an instance refits the top level only.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -12,6 +12,8 @@
 #include <glm/vec3.hpp>
 
 #include "photonsplat/camera.h"
+
+struct RTCSceneTy;  // Embree's scene (RTCScene), kept out of this header
 
 namespace ps {
 
@@ -46,8 +48,8 @@ public:
                    bool* found) const;
     void occluded(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
                   bool* blocked) const;
-    // Applies new transforms of the listed instances (already stored in `instances`): re-places their triangles
-    // or moves their instance, and recommits. Not thread-safe against concurrent queries.
+    // Applies new transforms of the listed instances (already stored in `instances`): a placed one becomes an
+    // instance of its mesh, an instance takes its new transform; then the top level is recommitted. Not thread-safe against concurrent queries.
     void update_instances(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances,
                           const std::vector<uint32_t>& moved);
     size_t bytes() const { return bytes_; }
@@ -64,6 +66,8 @@ private:
     // over the enabled instances; a ray from farther than that allows starts where it enters the scene's box.
     void measure_reach(const std::vector<Instance>& instances);
     void place_triangles(const MeshData& mesh, const Instance& instance, uint32_t id);
+    ::RTCSceneTy* mesh_scene(const std::vector<MeshData>& meshes, uint32_t mesh);
+    void attach_instance(const std::vector<MeshData>& meshes, const Instance& instance, uint32_t id);
     bool clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const;
     void clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const;
 
