@@ -136,6 +136,7 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
         for (const Instance& instance : instances) ++users[instance.mesh];
         rounding_.assign(instances.size(), 0.0f);
         placed_.assign(instances.size(), 0);
+        moved_before_.assign(instances.size(), 0);
         impl_->placed_vertices.assign(instances.size(), nullptr);
         for (uint32_t i = 0; i < instances.size(); ++i) {
             const MeshData& mesh = meshes[instances[i].mesh];
@@ -243,9 +244,21 @@ void RayTracer::update_instances(const std::vector<MeshData>& meshes, const std:
     for (uint32_t i : moved) {
         RTCGeometry geometry = impl_->instances[i];
         if (!geometry) continue;
+        if (placed_[i] && !moved_before_[i]) {
+            // A first move re-places its triangles: the scene then renders as a fresh one would, bit for bit.
+            moved_before_[i] = 1;
+            place_triangles(meshes[instances[i].mesh], instances[i], i);
+            rtc.rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+            rtc.rtcCommitGeometry(geometry);
+            if (is_flat(instances[i]))
+                rtc.rtcDisableGeometry(geometry);
+            else
+                rtc.rtcEnableGeometry(geometry);
+            continue;
+        }
         if (placed_[i]) {
-            // Moved: from now on an instance of its mesh (as Cycles keeps what moves in the viewport), so that
-            // dragging it refits the top level instead of rebuilding its triangles' BVH at every step.
+            // Moved again: being dragged. From now on an instance of its mesh (as Cycles keeps what moves in the
+            // viewport), so that each step refits the top level instead of rebuilding the object's BVH.
             rtc.rtcDetachGeometry(impl_->top, i);
             rtc.rtcReleaseGeometry(geometry);
             impl_->instances[i] = nullptr;

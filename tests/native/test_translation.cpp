@@ -91,7 +91,7 @@ TEST(Instancing, MovingAnInstanceUpdatesHitsWithoutRebuildingMeshes) {
     EXPECT_THROW(scene.set_instance_transform(7, moved), InvalidInput);
 }
 
-TEST(Instancing, AMeshShownOnceIsPlacedInRenderSpaceAndBecomesAnInstanceWhenMoved) {
+TEST(Instancing, AMeshShownOnceIsPlacedInRenderSpaceAndBecomesAnInstanceWhenDragged) {
     Scene scene;
     const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(0.8f), 1.45f, glm::vec3(0.0f)});
     const uint32_t once = add_unit_quad(scene, white);
@@ -120,13 +120,20 @@ TEST(Instancing, AMeshShownOnceIsPlacedInRenderSpaceAndBecomesAnInstanceWhenMove
     EXPECT_GE(tracer.rounding_scale(a), 1.0f);
     EXPECT_EQ(tracer.rounding_scale(b), scene.instances()[b].rounding_scale);
 
-    // Moved, it becomes an instance of its mesh (further moves refit the top level): the old spot is empty and
-    // the new one hit.
-    scene.set_instance_transform(a, glm::rotate(translation(0, 3, 0), kPi / 2.0f, glm::vec3(1, 0, 0)));
+    // Moved once, its triangles are re-placed (as a fresh scene would have them); moved again, as a drag does,
+    // it becomes an instance of its mesh (further moves refit the top level). Either way the old spot is empty
+    // and the new one hit.
+    scene.set_instance_transform(a, glm::rotate(translation(0, 2, 0), kPi / 2.0f, glm::vec3(1, 0, 0)));
     EXPECT_EQ(&scene.ray_tracer(), &tracer);  // updated in place
+    EXPECT_TRUE(tracer.placed(a));
+    Hit hit;
+    EXPECT_FALSE(tracer.intersect(down_at(0.7f, 0.1f), 0.0f, 100.0f, hit));
+    ASSERT_TRUE(tracer.intersect(Ray{{0.2f, -5.0f, 0.1f}, {0.0f, 1.0f, 0.0f}}, 0.0f, 100.0f, hit));
+    EXPECT_NEAR(hit.t, 7.0f, 1e-4f);
+    scene.set_instance_transform(a, glm::rotate(translation(0, 3, 0), kPi / 2.0f, glm::vec3(1, 0, 0)));
+    EXPECT_EQ(&scene.ray_tracer(), &tracer);
     EXPECT_FALSE(tracer.placed(a));
     EXPECT_EQ(tracer.rounding_scale(a), scene.instances()[a].rounding_scale);
-    Hit hit;
     EXPECT_FALSE(tracer.intersect(down_at(0.7f, 0.1f), 0.0f, 100.0f, hit));
     const Ray sideways{{0.2f, -5.0f, 0.1f}, {0.0f, 1.0f, 0.0f}};
     ASSERT_TRUE(tracer.intersect(sideways, 0.0f, 100.0f, hit));

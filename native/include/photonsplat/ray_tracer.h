@@ -3,8 +3,8 @@
 // instanced): a ray then descends one BVH, not a top level and an instance's own, and where objects' boxes
 // overlap (a room's walls, floor and furniture) it is not restarted in every instance it enters. That traced
 // the atrium's direct light in 0.60 of the time (docs/benchmarks.md). A mesh shown by several instances keeps
-// one BVH in object space, built and stored once, under an instance of it, and so does an object once it has
-// moved (the viewport's edits): moving an instance refits the top level only.
+// one BVH in object space, built and stored once, under an instance of it, and so does an object moved more than
+// once (dragged in the viewport): moving an instance refits the top level only.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -48,8 +48,9 @@ public:
                    bool* found) const;
     void occluded(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
                   bool* blocked) const;
-    // Applies new transforms of the listed instances (already stored in `instances`): a placed one becomes an
-    // instance of its mesh, an instance takes its new transform; then the top level is recommitted. Not thread-safe against concurrent queries.
+    // Applies new transforms of the listed instances (already stored in `instances`): a placed one is re-placed
+    // on its first move and becomes an instance of its mesh on the next, an instance takes its new transform;
+    // then the top level is recommitted. Not thread-safe against concurrent queries.
     void update_instances(const std::vector<MeshData>& meshes, const std::vector<Instance>& instances,
                           const std::vector<uint32_t>& moved);
     size_t bytes() const { return bytes_; }
@@ -76,6 +77,7 @@ private:
     size_t bytes_ = 0;
     std::vector<float> rounding_;    // per instance, rounding_scale()
     std::vector<uint8_t> placed_;    // per instance, placed()
+    std::vector<uint8_t> moved_before_;  // per instance: moved once already (update_instances)
     double reach_scale_ = 0.0, reach_offset_ = 0.0;
     float near_enough_ = 0.0f;  // origins with every coordinate within this are reachable (clip_to_scene)
     glm::vec3 scene_lo_{0.0f}, scene_hi_{0.0f};  // the top level's bounds, render space
