@@ -95,21 +95,19 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
             impl_->meshes.push_back(scene);
             rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
             RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            auto* vertices = static_cast<float*>(rtc.rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
-            auto* indices = static_cast<unsigned*>(rtc.rtcSetNewGeometryBuffer(
-                geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
-            if (!vertices || !indices) {
+            // Embree reads the mesh's own arrays (one copy of each: a 4-million-triangle scene would hold 72 MB
+            // twice). They outlive this tracer (the scene owns both and rebuilds it when meshes change), and
+            // MeshData keeps room for Embree's 16-byte read of the last element.
+            static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "positions are packed float triples");
+            rtc.rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                           mesh.positions.data(), 0, sizeof(glm::vec3), mesh.positions.size());
+            rtc.rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices.data(), 0,
+                                           3 * sizeof(uint32_t), triangles);
+            if (rtc.rtcGetDeviceError(device) != RTC_ERROR_NONE) {
                 rtc.rtcReleaseGeometry(geometry);
-                throw std::runtime_error("Embree: out of memory for mesh '" + mesh.name + "' (" +
+                throw std::runtime_error("Embree: could not share the buffers of mesh '" + mesh.name + "' (" +
                                          std::to_string(triangles) + " triangles)");
             }
-            for (size_t i = 0; i < mesh.positions.size(); ++i) {
-                vertices[3 * i + 0] = mesh.positions[i].x;
-                vertices[3 * i + 1] = mesh.positions[i].y;
-                vertices[3 * i + 2] = mesh.positions[i].z;
-            }
-            for (size_t i = 0; i < mesh.indices.size(); ++i) indices[i] = mesh.indices[i];
             rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
             rtc.rtcCommitGeometry(geometry);
             rtc.rtcAttachGeometryByID(scene, geometry, 0);

@@ -117,3 +117,24 @@ def test_clear_lights_then_new_lights_render_as_a_fresh_scene():
     expected, _ = ps.render(fresh, top_camera(), settings)
     assert image[..., :3].mean() > 0.01
     np.testing.assert_array_equal(image, expected)
+
+
+@pytest.mark.parametrize("zero_normal", [False, True])
+def test_vertex_normals_shade_as_their_corner_expansion(zero_normal):
+    """Normals given per vertex are kept per vertex (a third of the memory of corner normals, issue 19) and shade
+    exactly as the same normals given at every corner: the images are bit-identical at the same seed. A zero
+    vertex normal (each corner then falls back to its triangle's normal) keeps corner normals."""
+    from scenes import cornell_box, cornell_camera, uv_sphere
+    v, t, n = uv_sphere(0.35)
+    if zero_normal:
+        n = n.copy()
+        n[40] = 0.0
+    images = []
+    for normals in (n, np.ascontiguousarray(n[t])):
+        scene = cornell_box()
+        clay = scene.add_material(name="clay", color=(0.6, 0.45, 0.35))
+        scene.add_mesh(name="smooth", vertices=v, triangles=t, normals=normals,
+                       material_ids=np.full(len(t), clay, np.int32), transform=translate(0.4, 0.3, 0.5))
+        image, _ = ps.render(scene, cornell_camera(32, 32), ps.RenderSettings(photons=2000, seed=3))
+        images.append(image)
+    assert np.array_equal(images[0], images[1])

@@ -270,7 +270,8 @@ class BlenderSync:
             kept = self._arrays[key]
             if kept is None or kept.provides(needs):
                 return kept
-            needs = needs | mesh.MeshNeeds(tuple(sorted(kept.attributes)), kept.texspace is not None)
+            needs = needs | mesh.MeshNeeds(tuple(sorted(kept.attributes)), kept.texspace is not None,
+                                           uvs=kept.uvs_read, slots=kept.slots is not None)
         arrays = mesh.triangle_mesh(ob, needs)
         self.mesh_exports += 1
         report.meshes += 1

@@ -83,9 +83,14 @@ enum RayVisibility : uint32_t {
 struct MeshData {
     std::string name;
     glm::vec3 centre{0.0f};
+    // positions and indices are Embree's vertex and index buffers too (shared, not copied): each has capacity
+    // for one more element than it holds, since Embree reads the last one with a 16-byte load.
     std::vector<glm::vec3> positions;   // object space minus centre
     std::vector<uint32_t> indices;      // 3 per triangle
-    std::vector<glm::vec3> normals;     // 3 per triangle (corner shading normals); empty: flat shading
+    // Shading normals, unit length: 3 per triangle (corner normals), or 1 per position where the input gave one
+    // normal per vertex (a smooth mesh: a third of the memory); empty: flat shading. Read with corner_normal.
+    std::vector<glm::vec3> normals;
+    bool normals_per_vertex = false;
     std::vector<glm::vec2> uvs;         // 3 per triangle; empty: no UV map (every UV is 0, 0)
     std::vector<uint32_t> materials;    // 1 per triangle
     glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
@@ -101,6 +106,11 @@ struct MeshData {
         for (const Attribute& a : attributes)
             if (a.id == id) return &a;
         return nullptr;
+    }
+
+    // The shading normal at corner `corner` of kept triangle t (normals not empty).
+    const glm::vec3& corner_normal(size_t t, int corner) const {
+        return normals_per_vertex ? normals[indices[3 * t + corner]] : normals[3 * t + corner];
     }
 
     size_t triangle_count() const { return materials.size(); }
