@@ -4,6 +4,7 @@ first sample of it, and the peak memory of each.
 Run with Debian's Python (it starts one Blender per engine, so each peak memory is its own process's):
 
     /usr/bin/python3 tools/big_scene_timing.py [--scene build/big_scene.blend] [--repeats 3] [--json OUT]
+        [--scripts B/blender]     (the add-on of build B; default this tree's build/blender)
 
 The scene is blend_scenes/make_big_scene.py's (written to build/big_scene.blend when missing). In each Blender:
 one warm-up render of the engine, then --repeats timed renders through bpy.ops.render.render() (F12), all at
@@ -144,19 +145,18 @@ def in_blender(engine_name, repeats, out):
 
 # --- the driver -------------------------------------------------------------------------------------------------
 
-def blender_command(script_args, scene_path):
-    env_scripts = ROOT / "build" / "blender"
+def blender_command(script_args, scene_path, env_scripts):
     return (["blender", "-b", "--factory-startup", "-noaudio", "--addons", "photonsplat", str(scene_path),
              "--python", str(Path(__file__).resolve()), "--"] + script_args,
             dict(os.environ, BLENDER_USER_SCRIPTS=str(env_scripts)))
 
 
-def run_engine(engine_name, scene_path, repeats, workdir):
+def run_engine(engine_name, scene_path, repeats, workdir, scripts):
     out = workdir / f"big_scene_{engine_name}.json"
     if out.exists():
         out.unlink()
     command, env = blender_command(["--child", engine_name, "--repeats", str(repeats), "--out", str(out)],
-                                   scene_path)
+                                   scene_path, scripts)
     completed = subprocess.run(command, env=env, capture_output=True, text=True)
     if not out.exists():
         sys.stderr.write(completed.stdout[-4000:] + completed.stderr[-4000:])
@@ -205,6 +205,8 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--engines", default="photonsplat,cycles")
     parser.add_argument("--json", help="write both engines' records here")
+    parser.add_argument("--scripts", default=str(ROOT / "build" / "blender"),
+                        help="BLENDER_USER_SCRIPTS holding the add-on to time (another build: B/blender)")
     args = parser.parse_args()
     scene_path = Path(args.scene)
     if not scene_path.exists():
@@ -214,8 +216,9 @@ def main():
     workdir = ROOT / "build"
     started = time.strftime("%Y-%m-%d %H:%M:%S")
     load = os.getloadavg()[0]
-    results = {name: run_engine(name, scene_path, args.repeats, workdir) for name in args.engines.split(",")}
-    print(f"{started}, {os.cpu_count()} cores, load average {load:.2f} at the start, medians of {args.repeats}")
+    results = {name: run_engine(name, scene_path, args.repeats, workdir, args.scripts)
+               for name in args.engines.split(",")}
+    print(f"{args.scripts}: {started}, {os.cpu_count()} cores, load average {load:.2f} at the start, medians of {args.repeats}")
     if "photonsplat" in results and "cycles" in results:
         print(table(results["photonsplat"], results["cycles"]))
     else:
