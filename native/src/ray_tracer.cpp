@@ -13,6 +13,7 @@
 #include <glm/mat4x4.hpp>
 
 #include "embree_api.h"
+#include "mesh_bvh.h"
 #include "photonsplat/scene.h"
 
 namespace ps {
@@ -28,6 +29,7 @@ bool embree_accepts(const Ray& ray, float t_min, float t_max) {
     return t_min >= 0.0f && t_min <= t_max;
 }
 
+}  // namespace
 
 // One Embree device per process, kept for its lifetime: creating devices per render is slow, and
 // releasing one while another thread still uses it is how native add-ons crash Blender.
@@ -51,6 +53,8 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
     throw std::runtime_error(std::string("Embree: ") + what + " failed (" + reason + ", code " +
                              std::to_string(static_cast<int>(error)) + ")");
 }
+
+namespace {
 
 // A flattened instance (zero scale) has no inverse: Embree gets the identity and the geometry is disabled.
 bool is_flat(const Instance& instance) { return instance.normal_to_world == glm::mat3(0.0f); }
@@ -90,30 +94,10 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
                 impl_->meshes.push_back(nullptr);
                 continue;
             }
-            RTCScene scene = rtc.rtcNewScene(device);
-            if (!scene) throw_on_embree_error(device, "creating a mesh scene");
+            // Built ahead while the scene was being filled (mesh_bvh.h), else here; one reference is ours.
+            RTCScene scene = mesh.bvh ? mesh.bvh->retain() : nullptr;
+            if (!scene) scene = build_mesh_scene(mesh_buffers(mesh));
             impl_->meshes.push_back(scene);
-            rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-            RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            // Embree reads the mesh's own arrays (one copy of each: a 4-million-triangle scene would hold 72 MB
-            // twice). They outlive this tracer (the scene owns both and rebuilds it when meshes change), and
-            // MeshData keeps room for Embree's 16-byte read of the last element.
-            static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "positions are packed float triples");
-            rtc.rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                           mesh.positions.data(), 0, sizeof(glm::vec3), mesh.positions.size());
-            rtc.rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices.data(), 0,
-                                           3 * sizeof(uint32_t), triangles);
-            if (rtc.rtcGetDeviceError(device) != RTC_ERROR_NONE) {
-                rtc.rtcReleaseGeometry(geometry);
-                throw std::runtime_error("Embree: could not share the buffers of mesh '" + mesh.name + "' (" +
-                                         std::to_string(triangles) + " triangles)");
-            }
-            rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
-            rtc.rtcCommitGeometry(geometry);
-            rtc.rtcAttachGeometryByID(scene, geometry, 0);
-            rtc.rtcReleaseGeometry(geometry);
-            rtc.rtcCommitScene(scene);
-            throw_on_embree_error(device, "building a mesh BVH");
             bytes_ += mesh.positions.size() * 3 * sizeof(float) + triangles * 3 * sizeof(unsigned);
         }
 

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
+#include "mesh_bvh.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/stats.h"
@@ -373,6 +374,10 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         }
     }
     // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
+    if (build_bvhs_ahead_ && data.triangle_count() > 0) {
+        if (!bvh_queue_) bvh_queue_ = std::make_unique<BvhQueue>();
+        data.bvh = bvh_queue_->start(data);  // reads the arrays' buffers, which stay put when `data` moves
+    }
     meshes_.push_back(std::move(data));
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
