@@ -8,6 +8,10 @@
 
 namespace ps {
 
+namespace {
+constexpr size_t kCompactBvhTriangles = 1u << 19;  // 524,288
+}  // namespace
+
 MeshBuffers mesh_buffers(const MeshData& mesh) {
     return {mesh.name, mesh.positions.data(), mesh.positions.size(), mesh.indices.data(), mesh.triangle_count()};
 }
@@ -18,7 +22,11 @@ RTCScene build_mesh_scene(const MeshBuffers& mesh) {
     rtc.rtcGetDeviceError(device);  // clear what an earlier call on this thread may have left
     RTCScene scene = rtc.rtcNewScene(device);
     if (!scene) throw_on_embree_error(device, "creating a mesh scene");
-    rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    // A mesh of millions of triangles gets Embree's compact leaves (triangles by index into the shared positions,
+    // not copies of their corners): a third of the BVH's memory for slightly slower traversal; smaller meshes keep
+    // the faster leaves, whose memory does not matter.
+    const bool compact = mesh.triangle_count >= kCompactBvhTriangles;
+    rtc.rtcSetSceneFlags(scene, compact ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT : RTC_SCENE_FLAG_ROBUST);
     RTCGeometry geometry = rtc.rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree reads the mesh's own arrays (one copy of each: a 4-million-triangle scene would hold 72 MB twice).
     // They outlive the scene (MeshData owns both, see MeshData::bvh), and MeshData keeps room for Embree's
