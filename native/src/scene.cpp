@@ -374,6 +374,7 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         }
     }
     // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
+    meshes_.reserve(meshes_.size() + 1);  // the push_back below cannot throw once a build reads `data`
     if (build_bvhs_ahead_ && data.triangle_count() > 0) {
         if (!bvh_queue_) bvh_queue_ = std::make_unique<BvhQueue>();
         data.bvh = bvh_queue_->start(data);  // reads the arrays' buffers, which stay put when `data` moves
