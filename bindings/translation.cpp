@@ -128,6 +128,10 @@ ps::Texture texture_from_array(const std::string& name, const py::object& pixels
 void bind_translation(py::module_& m) {
     auto scene = py::reinterpret_borrow<py::class_<ps::Scene>>(m.attr("Scene"));
     scene
+        .def_property("build_bvhs_ahead", &ps::Scene::build_bvhs_ahead, &ps::Scene::set_build_bvhs_ahead,
+                      "True: add_mesh_data starts building the mesh's BVH on a thread of the scene's own (the GIL "
+                      "not needed) and returns, so that the caller prepares the next mesh meanwhile; the render "
+                      "takes the BVHs built. The same BVHs and images either way. Default False: no thread.")
         .def(
             "add_mesh_data",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,

@@ -8,8 +8,27 @@ is one edit here. Each entry says which version changed what.
 import math
 
 import bpy
+import numpy as np
 
 VERSION = bpy.app.version
+
+
+def corner_normals_are_vertex_normals(mesh):
+    """Whether every corner's split normal is its vertex's normal, bit for bit (all faces smooth, no auto smooth
+    or custom normals): then the vertex normals, a quarter of the corner normals' floats, say the same. 4.1
+    replaced auto smooth by Mesh.normals_domain ('POINT': exactly this case); 3.4 computes the corner normals of
+    such a mesh as copies of the vertex normals (BKE_mesh_normals_loop_split without split normals)."""
+    domain = getattr(mesh, "normals_domain", None)
+    if domain is not None:
+        return domain == 'POINT'
+    if mesh.use_auto_smooth or mesh.has_custom_normals:
+        return False
+    polygons = mesh.polygons
+    if len(polygons) == 0:
+        return False
+    smooth = np.empty(len(polygons), dtype=bool)
+    polygons.foreach_get("use_smooth", smooth)
+    return bool(smooth.all())
 
 
 def prepare_corner_normals(mesh):

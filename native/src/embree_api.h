@@ -17,7 +17,8 @@
 // Every Embree function the core calls (rtcInitIntersectContext is inline in the header: not a symbol).
 #define PS_EMBREE_FUNCTIONS(X)                                                                               \
     X(rtcNewDevice) X(rtcGetDeviceError) X(rtcNewScene) X(rtcSetSceneFlags) X(rtcCommitScene)               \
-    X(rtcReleaseScene) X(rtcGetSceneBounds) X(rtcNewGeometry) X(rtcSetNewGeometryBuffer)                   \
+    X(rtcReleaseScene) X(rtcRetainScene) X(rtcGetSceneBounds) X(rtcNewGeometry)                             \
+    X(rtcSetSharedGeometryBuffer) X(rtcSetNewGeometryBuffer)                                                \
     X(rtcSetGeometryMask) X(rtcSetGeometryInstancedScene) X(rtcSetGeometryTimeStepCount)                   \
     X(rtcSetGeometryTransform) X(rtcCommitGeometry) X(rtcAttachGeometryByID) X(rtcReleaseGeometry)         \
     X(rtcEnableGeometry) X(rtcDisableGeometry) X(rtcIntersect1) X(rtcOccluded1) X(rtcUpdateGeometryBuffer)   \

@@ -13,6 +13,7 @@
 #include <glm/mat4x4.hpp>
 
 #include "embree_api.h"
+#include "mesh_bvh.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/stats.h"
 
@@ -31,6 +32,7 @@ bool embree_accepts(const Ray& ray, float t_min, float t_max) {
     return t_min >= 0.0f && t_min <= t_max;
 }
 
+}  // namespace
 
 // One Embree device per process, kept for its lifetime: creating devices per render is slow, and
 // releasing one while another thread still uses it is how native add-ons crash Blender.
@@ -54,6 +56,8 @@ void throw_on_embree_error(RTCDevice device, const char* what) {
     throw std::runtime_error(std::string("Embree: ") + what + " failed (" + reason + ", code " +
                              std::to_string(static_cast<int>(error)) + ")");
 }
+
+namespace {
 
 // A flattened instance (zero scale) has no inverse: Embree gets the identity and the geometry is disabled.
 bool is_flat(const Instance& instance) { return instance.normal_to_world == glm::mat3(0.0f); }
@@ -105,11 +109,11 @@ RTCGeometry triangle_geometry(const EmbreeApi& rtc, RTCDevice device, const Mesh
 }
 
 // Whether an instance's triangles go into the top level in render space: its mesh is shown by no other instance
-// (a shared mesh is stored once, under instances), and the instance lies within 64 of its own sizes of the render
+// (a shared mesh is stored once, under instances), is under kPlacedTriangleLimit, and the instance lies within 64 of its own sizes of the render
 // origin, so that its corners, rounded in render space, lose at most 6 bits of what object space kept (as
 // MeshData's re-centring allows); farther out it stays an instance, exact in its own space.
 bool places_triangles(const MeshData& mesh, const Instance& instance, uint32_t users) {
-    if (users != 1 || is_flat(instance)) return false;
+    if (users != 1 || is_flat(instance) || mesh.triangle_count() >= RayTracer::kPlacedTriangleLimit) return false;
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (int corner = 0; corner < 8; ++corner) {
         const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
@@ -182,26 +186,11 @@ RayTracer::~RayTracer() { delete impl_; }
 // The object-space BVH of mesh m, built on first use and shared by every instance of it.
 RTCScene RayTracer::mesh_scene(const std::vector<MeshData>& meshes, uint32_t m) {
     if (impl_->meshes[m]) return impl_->meshes[m];
-    const EmbreeApi& rtc = impl_->rtc;
-    RTCDevice device = shared_device();
     const MeshData& mesh = meshes[m];
-    RTCScene scene = rtc.rtcNewScene(device);
-    if (!scene) throw_on_embree_error(device, "creating a mesh scene");
+    // Built ahead while the scene was being filled (mesh_bvh.h), else here; one reference is ours.
+    RTCScene scene = mesh.bvh ? mesh.bvh->retain() : nullptr;
+    if (!scene) scene = build_mesh_scene(mesh_buffers(mesh));
     impl_->meshes[m] = scene;
-    rtc.rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-    float* vertices = nullptr;
-    RTCGeometry geometry = triangle_geometry(rtc, device, mesh, vertices);
-    for (size_t k = 0; k < mesh.positions.size(); ++k) {
-        vertices[3 * k + 0] = mesh.positions[k].x;
-        vertices[3 * k + 1] = mesh.positions[k].y;
-        vertices[3 * k + 2] = mesh.positions[k].z;
-    }
-    rtc.rtcSetGeometryMask(geometry, 0xFFFFFFFFu);  // visibility is decided by the instance's mask
-    rtc.rtcCommitGeometry(geometry);
-    rtc.rtcAttachGeometryByID(scene, geometry, 0);
-    rtc.rtcReleaseGeometry(geometry);
-    rtc.rtcCommitScene(scene);
-    throw_on_embree_error(device, "building a mesh BVH");
     bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
     return scene;
 }

@@ -39,8 +39,8 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Shad
     glm::vec3 ng = glm::normalize(instance.normal_to_world * glm::cross(p1 - p0, p2 - p0));
     glm::vec3 ns = ng;
     if (!mesh.normals.empty()) {
-        ns = instance.normal_to_world * (w * mesh.normals[3 * t] + hit.u * mesh.normals[3 * t + 1] +
-                                         hit.v * mesh.normals[3 * t + 2]);
+        ns = instance.normal_to_world * (w * mesh.corner_normal(t, 0) + hit.u * mesh.corner_normal(t, 1) +
+                                         hit.v * mesh.corner_normal(t, 2));
         const float len = glm::length(ns);
         ns = (len > 1e-12f && std::isfinite(len)) ? ns / len : ng;
     }

@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
+#include "mesh_bvh.h"
 #include "photonsplat/errors.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/stats.h"
@@ -269,9 +270,31 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
     // Everything is valid: keep the non-degenerate triangles, with per-corner normals, UVs and attributes.
     MeshData data;
     data.name = mesh.name;
-    data.positions.reserve(mesh.vertex_count);
+    // One element more than held: Embree shares these buffers and reads their last element with a 16-byte load.
+    data.positions.reserve(mesh.vertex_count + 1);
+    data.positions.emplace_back(0.0f);
+    data.positions.pop_back();
     for (size_t i = 0; i < mesh.vertex_count; ++i)
         data.positions.emplace_back(mesh.vertices[3 * i], mesh.vertices[3 * i + 1], mesh.vertices[3 * i + 2]);
+    data.indices.reserve(3 * mesh.triangle_count + 1);
+    data.indices.push_back(0u);
+    data.indices.pop_back();
+    data.materials.reserve(mesh.triangle_count);
+    // Normals per vertex stay per vertex (normalised once each) when every one has a direction: each corner then
+    // reads exactly what corner_normal below would have stored for it. A zero one falls back to the triangle's
+    // own normal, which differs per triangle: such a mesh keeps corner normals.
+    if (mesh.normals && !mesh.normals_per_corner) {
+        data.normals.reserve(mesh.vertex_count);
+        for (size_t i = 0; i < mesh.vertex_count && data.normals.size() == i; ++i) {
+            const glm::vec3 v(mesh.normals[3 * i], mesh.normals[3 * i + 1], mesh.normals[3 * i + 2]);
+            const float len = glm::length(v);
+            if (len > 0.0f && std::isfinite(len)) data.normals.push_back(v / len);
+        }
+        data.normals_per_vertex = data.normals.size() == mesh.vertex_count;
+        if (!data.normals_per_vertex) std::vector<glm::vec3>().swap(data.normals);
+    }
+    if (mesh.normals && !data.normals_per_vertex) data.normals.reserve(3 * mesh.triangle_count);
+    if (mesh.uvs) data.uvs.reserve(3 * mesh.triangle_count);
     auto corner_normal = [&](size_t t, int corner, const glm::vec3& fallback) {
         const float* n = mesh.normals_per_corner ? mesh.normals + 9 * t + 3 * corner
                                                  : mesh.normals + 3 * static_cast<size_t>(mesh.triangles[3 * t + corner]);
@@ -308,7 +331,7 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
             continue;
         }
         data.indices.insert(data.indices.end(), {i0, i1, i2});
-        if (mesh.normals) {
+        if (mesh.normals && !data.normals_per_vertex) {
             const glm::vec3 ng = ng_raw / len;
             for (int c = 0; c < 3; ++c) data.normals.push_back(corner_normal(t, c, ng));
         }
@@ -351,6 +374,13 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         }
     }
     // Only the vertices of kept triangles matter; the others stay (indices refer to them) but cost little.
+    meshes_.reserve(meshes_.size() + 1);  // the push_back below cannot throw once a build reads `data`
+    // Only a mesh too big to be placed in render space keeps the object-space BVH built here (a smaller one, shown
+    // once, is placed, and shown many times is quick to build at the first render).
+    if (build_bvhs_ahead_ && data.triangle_count() >= RayTracer::kPlacedTriangleLimit) {
+        if (!bvh_queue_) bvh_queue_ = std::make_unique<BvhQueue>();
+        data.bvh = bvh_queue_->start(data);  // reads the arrays' buffers, which stay put when `data` moves
+    }
     meshes_.push_back(std::move(data));
     return static_cast<uint32_t>(meshes_.size() - 1);
 }

@@ -697,3 +697,55 @@ def test_base_colour_texture_goes_to_the_diffuse_closure(empty_scene):
     diffuse = [d for d in exported["closures"] if d["kind"] in ("diffuse", "principled_diffuse")]
     assert len(diffuse) == 1 and diffuse[0]["texture"] == 0 and diffuse[0]["texture_target"] == "color"
     assert all("texture" not in d for d in exported["closures"] if d not in diffuse)
+
+
+def _split_normals(mesh_data, count):
+    """Every triangle corner's split normal, read as the export read them before issue 19 (the reference)."""
+    compat.prepare_corner_normals(mesh_data)
+    normals = np.empty(count * 9, dtype=np.float32)
+    mesh_data.loop_triangles.foreach_get("split_normals", normals)
+    return normals.reshape(-1, 3, 3)
+
+
+@pytest.mark.parametrize("shading", ["smooth", "flat", "mixed", "auto_smooth"])
+def test_normals_are_the_split_normals_bit_for_bit(empty_scene, shading):
+    """A smooth mesh's normals are read per vertex (issue 19: a quarter of the floats); expanded to the corners they
+    are exactly the split normals, so images do not change. Other meshes keep per-corner split normals."""
+    from photonsplat.export import mesh as mesh_export
+    bpy.ops.mesh.primitive_monkey_add()
+    ob = bpy.context.active_object
+    ob.modifiers.new("Subdivision", 'SUBSURF').levels = 1
+    for i, polygon in enumerate(ob.data.polygons):
+        polygon.use_smooth = shading in ("smooth", "auto_smooth") or (shading == "mixed" and i % 2 == 0)
+    if shading == "auto_smooth":
+        if not hasattr(ob.data, "use_auto_smooth"):
+            pytest.skip("auto smooth is a modifier since Blender 4.1")
+        ob.data.use_auto_smooth = True
+    evaluated = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    arrays = mesh_export.triangle_mesh(evaluated, mesh_export.MeshNeeds(uvs=True, slots=True))
+    expected = _split_normals(evaluated.data, len(arrays.triangles))
+    assert (arrays.normals.ndim == 2) == (shading == "smooth")
+    corners = arrays.normals[arrays.triangles] if arrays.normals.ndim == 2 else arrays.normals
+    assert corners.shape == expected.shape and np.array_equal(corners.view(np.uint32), expected.view(np.uint32))
+    assert arrays.uvs.shape == (len(arrays.triangles), 3, 2) and arrays.slots.shape == (len(arrays.triangles),)
+
+
+def test_plain_materials_export_no_uvs_and_no_slots(empty_scene):
+    """Only what a material reads is exported (issue 19): a plain diffuse mesh has neither its UV map nor its
+    slots in the core (its one material everywhere); an image texture brings the UV map back."""
+    add_camera(empty_scene)
+    bpy.ops.mesh.primitive_monkey_add()
+    ob = bpy.context.active_object
+    plain, diffuse = node_material("Plain", "ShaderNodeBsdfDiffuse")
+    ob.data.materials.append(plain)
+    ob.data.materials.append(plain)
+    ob.data.polygons[0].material_index = 1
+    (mesh,) = export_current().scene.meshes
+    assert mesh["uvs"] is None
+    assert np.array_equal(mesh["material_ids"], np.zeros(len(mesh["triangles"]), np.int32))
+    image = bpy.data.images.new("Checker", 4, 4)
+    texture = plain.node_tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    plain.node_tree.links.new(texture.outputs["Color"], diffuse.inputs["Color"])
+    (mesh,) = export_current().scene.meshes
+    assert mesh["uvs"].shape == (len(mesh["triangles"]), 3, 2)

@@ -144,13 +144,17 @@ def material_spec(specs, material):
 
 def mesh_needs(specs, where):
     """What the materials of Placement `where` read from its mesh (mesh.MeshNeeds): only the attributes and the
-    texture space that some program uses are exported."""
+    texture space that some program uses are exported, the render UV map only for materials that may read it, and
+    the triangles' slots only when the slots hold different materials."""
     needs = mesh.MeshNeeds()
     if where.holdout:
         return needs
+    # Per-triangle slots only matter where the slots hold different materials.
+    names = {None if material is None else material.name_full for material in where.materials}
+    needs = mesh.MeshNeeds(slots=len(names) > 1)
     for material in where.materials:
         spec = material_spec(specs, material)
-        needs = needs | mesh.MeshNeeds(tuple(sorted(spec.attributes)), spec.uses_texspace)
+        needs = needs | mesh.MeshNeeds(tuple(sorted(spec.attributes)), spec.uses_texspace, uvs=spec.uses_uvs)
     return needs
 
 
@@ -207,7 +211,8 @@ class GeometryTable:
         mesh_id = self._core_scene.add_mesh_data(name=name, vertices=triangles.vertices,
                                                  triangles=triangles.triangles, normals=triangles.normals,
                                                  uvs=triangles.uvs,
-                                                 material_ids=mesh.scene_material_ids(triangles.slots, slots),
+                                                 material_ids=mesh.scene_material_ids(triangles.slots, slots,
+                                                                                      len(triangles.triangles)),
                                                  **extra)
         return mesh_id, len(triangles.triangles)
 

@@ -157,6 +157,12 @@ class MaterialSpec:
         return list(self.program.attributes) if self.uses_program else []
 
     @property
+    def uses_uvs(self):
+        """Whether the core may read the render UV map for it: an image on a closure, or any node program (UV
+        reads, Normal Map tangents); a plain material needs none, so its meshes export no UVs."""
+        return self.uses_program or any(c.texture is not None for c in self.closures)
+
+    @property
     def uses_texspace(self):
         return self.uses_program and self.program.uses_texspace
 

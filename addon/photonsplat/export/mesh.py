@@ -24,9 +24,12 @@ CONVERTIBLE_TYPES = {'CURVE', 'SURFACE', 'FONT', 'META'}
 class TriangleMesh:
     vertices: np.ndarray       # float32 (N, 3), object space
     triangles: np.ndarray      # int32 (M, 3), indices into vertices
-    normals: np.ndarray        # float32 (M, 3, 3), shading normal of each triangle corner (split normals)
-    slots: np.ndarray          # int32 (M,), material slot index of each triangle
+    # float32 shading normals (split normals): (N, 3) per vertex where every corner's normal is its vertex's
+    # (all faces smooth, no auto smooth or custom normals), else (M, 3, 3) per triangle corner.
+    normals: np.ndarray
+    slots: np.ndarray = None   # int32 (M,), material slot index of each triangle; None: not read (all slot 0)
     uvs: np.ndarray = None     # float32 (M, 3, 2), the render UV map at each triangle corner; None without one
+    uvs_read: bool = False     # whether the UV map was looked for (MeshNeeds.uvs)
     # What node programs read (only when some material's program does, MeshNeeds): attribute name -> float32
     # (N, k) per vertex or (M, 3, k) per triangle corner, k 1..4; "" is the default colour attribute.
     attributes: dict = field(default_factory=dict)
@@ -36,18 +39,23 @@ class TriangleMesh:
     def provides(self, needs):
         """Whether these arrays hold what `needs` asks for (attributes a mesh lacks are not looked for again)."""
         looked_up = set(self.attributes) | set(self.missing)
-        return set(needs.attributes) <= looked_up and (self.texspace is not None or not needs.texspace)
+        return (set(needs.attributes) <= looked_up and (self.texspace is not None or not needs.texspace)
+                and (self.uvs_read or not needs.uvs) and (self.slots is not None or not needs.slots))
 
 
 @dataclass(frozen=True)
 class MeshNeeds:
-    """What the materials of a mesh's objects read from it besides triangles, normals and the UV map."""
+    """What the materials of a mesh's objects read from it besides triangles and normals. Only what is asked
+    for is read from Blender and stored in the core: a 4-million-triangle scene of plain materials needs
+    neither its UV map (24 bytes a triangle) nor its slots."""
     attributes: tuple = ()     # attribute names, sorted
     texspace: bool = False
+    uvs: bool = False          # the render UV map (image textures, node programs)
+    slots: bool = False        # the triangles' material slots (the slots hold different materials)
 
     def __or__(self, other):
         return MeshNeeds(tuple(sorted(set(self.attributes) | set(other.attributes))),
-                         self.texspace or other.texspace)
+                         self.texspace or other.texspace, self.uvs or other.uvs, self.slots or other.slots)
 
 
 def needs_to_mesh(instance):
@@ -85,17 +93,25 @@ def _from_mesh(mesh, needs=MeshNeeds()):
     mesh.vertices.foreach_get("co", vertices)
     triangles = np.empty(count * 3, dtype=np.int32)
     mesh.loop_triangles.foreach_get("vertices", triangles)
-    slots = np.empty(count, dtype=np.int32)
-    mesh.loop_triangles.foreach_get("material_index", slots)
+    slots = None
+    if needs.slots:
+        slots = np.empty(count, dtype=np.int32)
+        mesh.loop_triangles.foreach_get("material_index", slots)
 
     # Split normals honour flat/smooth shading, auto smooth and custom normals, exactly what Cycles shades
-    # with. In Blender 3.4 they must be computed explicitly first.
-    compat.prepare_corner_normals(mesh)
-    normals = np.empty(count * 9, dtype=np.float32)
-    mesh.loop_triangles.foreach_get("split_normals", normals)
+    # with. Where they are the vertex normals, those are read instead (the same floats, a quarter as many).
+    if compat.corner_normals_are_vertex_normals(mesh):
+        normals = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("normal", normals)
+        normals = normals.reshape(-1, 3)
+    else:
+        compat.prepare_corner_normals(mesh)    # Blender 3.4 computes them only when asked
+        normals = np.empty(count * 9, dtype=np.float32)
+        mesh.loop_triangles.foreach_get("split_normals", normals)
+        normals = normals.reshape(-1, 3, 3)
 
-    result = TriangleMesh(vertices=vertices.reshape(-1, 3), triangles=triangles.reshape(-1, 3),
-                          normals=normals.reshape(-1, 3, 3), slots=slots, uvs=_corner_uvs(mesh, count))
+    result = TriangleMesh(vertices=vertices.reshape(-1, 3), triangles=triangles.reshape(-1, 3), normals=normals,
+                          slots=slots, uvs=_corner_uvs(mesh, count) if needs.uvs else None, uvs_read=needs.uvs)
     missing = []
     for name in needs.attributes:
         array = attribute_array(mesh, name, count)
@@ -213,13 +229,18 @@ def _corner_uvs(mesh, count):
     return per_loop.reshape(-1, 2)[loops].reshape(count, 3, 2)
 
 
-def scene_material_ids(slots, slot_material_ids):
-    """Per-triangle core material ids from per-triangle slot indices and the core id of each slot.
+def scene_material_ids(slots, slot_material_ids, count):
+    """Per-triangle core material ids (`count` triangles) from per-triangle slot indices and the core id of each
+    slot; slots None (not read: every slot holds the same material) gives the first slot's everywhere.
 
     Blender clamps a material index beyond the last slot to the last slot; an object without slots uses
     the default material (the caller passes a single-entry list then).
     """
     table = np.asarray(slot_material_ids, dtype=np.int32)
+    if slots is None:
+        if len(set(table.tolist())) > 1:
+            raise ValueError("the triangles' slots were not read, but the slots hold different materials")
+        return np.full(count, table[0], dtype=np.int32)
     return table[np.clip(slots, 0, len(table) - 1)]
 
 

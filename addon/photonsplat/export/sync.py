@@ -99,6 +99,9 @@ class _Build:
 
     def __init__(self, core, specs=None):
         self.scene = core.Scene()
+        # Each mesh's BVH is built by the core on a thread of its own while the next mesh is read from Blender.
+        if hasattr(self.scene, "build_bvhs_ahead"):
+            self.scene.build_bvhs_ahead = True
         self.material_notes = []
         self.materials = MaterialTable(self.scene, self.material_notes, specs)
         self.geometry = GeometryTable(self.scene, self.materials)
@@ -270,7 +273,8 @@ class BlenderSync:
             kept = self._arrays[key]
             if kept is None or kept.provides(needs):
                 return kept
-            needs = needs | mesh.MeshNeeds(tuple(sorted(kept.attributes)), kept.texspace is not None)
+            needs = needs | mesh.MeshNeeds(tuple(sorted(kept.attributes)), kept.texspace is not None,
+                                           uvs=kept.uvs_read, slots=kept.slots is not None)
         arrays = mesh.triangle_mesh(ob, needs)
         self.mesh_exports += 1
         report.meshes += 1

@@ -43,6 +43,10 @@ public:
     // the rays are coherent (from one point towards one light, or parallel and side by side). Results are
     // those of the single-ray calls.
     static constexpr int kPacketRays = 8;
+    // Meshes of this many triangles or more stay instances even when shown once: their BVH can then be built
+    // while the scene is exported (Scene::set_build_bvhs_ahead), where placed triangles must wait for the
+    // transform and the first render, and entering an instance costs little beside traversing a mesh this big.
+    static constexpr size_t kPlacedTriangleLimit = 262144;
     struct Packet;  // the rays of one packet call, clipped (ray_tracer.cpp)
     void intersect(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility, Hit* hits,
                    bool* found) const;

@@ -38,6 +38,8 @@ namespace ps {
 struct Stats;
 
 class RayTracer;
+class MeshBvh;
+class BvhQueue;
 
 // Input of add_mesh_data / add_mesh: raw arrays as the bindings receive them.
 struct MeshInput {
@@ -83,9 +85,14 @@ enum RayVisibility : uint32_t {
 struct MeshData {
     std::string name;
     glm::vec3 centre{0.0f};
+    // positions and indices are Embree's vertex and index buffers too (shared, not copied): each has capacity
+    // for one more element than it holds, since Embree reads the last one with a 16-byte load.
     std::vector<glm::vec3> positions;   // object space minus centre
     std::vector<uint32_t> indices;      // 3 per triangle
-    std::vector<glm::vec3> normals;     // 3 per triangle (corner shading normals); empty: flat shading
+    // Shading normals, unit length: 3 per triangle (corner normals), or 1 per position where the input gave one
+    // normal per vertex (a smooth mesh: a third of the memory); empty: flat shading. Read with corner_normal.
+    std::vector<glm::vec3> normals;
+    bool normals_per_vertex = false;
     std::vector<glm::vec2> uvs;         // 3 per triangle; empty: no UV map (every UV is 0, 0)
     std::vector<uint32_t> materials;    // 1 per triangle
     glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
@@ -95,12 +102,20 @@ struct MeshData {
     };
     std::vector<Attribute> attributes;      // only those some material's program reads (the add-on's choice)
     glm::vec3 texspace_location{0.0f}, texspace_size{1.0f};  // object space (not minus centre)
+    // Its Embree BVH when it is built ahead (Scene::set_build_bvhs_ahead, mesh_bvh.h), over positions and
+    // indices: last, so that it goes (its build finished) before they do.
+    std::shared_ptr<MeshBvh> bvh;
 
     // The attribute with this id, or nullptr.
     const Attribute* attribute(uint32_t id) const {
         for (const Attribute& a : attributes)
             if (a.id == id) return &a;
         return nullptr;
+    }
+
+    // The shading normal at corner `corner` of kept triangle t (normals not empty).
+    const glm::vec3& corner_normal(size_t t, int corner) const {
+        return normals_per_vertex ? normals[indices[3 * t + corner]] : normals[3 * t + corner];
     }
 
     size_t triangle_count() const { return materials.size(); }
@@ -219,6 +234,11 @@ public:
 
     // The Embree acceleration structure, built on first use after the last change. Thread-safe to query.
     const RayTracer& ray_tracer() const;
+    // On: add_mesh_data starts building each mesh's BVH on a thread of the scene's own and returns, so that the
+    // caller fills the rest of the scene meanwhile (the add-on: its next mesh read from Blender); ray_tracer()
+    // then takes them. The same BVHs either way. Off (the default): no thread, every BVH built by ray_tracer().
+    void set_build_bvhs_ahead(bool on) { build_bvhs_ahead_ = on; }
+    bool build_bvhs_ahead() const { return build_bvhs_ahead_; }
 
 private:
     std::vector<Material> materials_;
@@ -226,6 +246,9 @@ private:
     std::vector<Light> lights_;
     std::vector<glm::dvec3> light_positions_;  // world space, one per light
     std::vector<MeshData> meshes_;
+    // After meshes_: goes first, dropping the builds not started and waiting for the running one.
+    bool build_bvhs_ahead_ = false;
+    std::unique_ptr<BvhQueue> bvh_queue_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};
     std::unique_ptr<ShaderProgram> world_program_;

@@ -126,8 +126,8 @@ bool mikktspace_normal(const ShaderGlobals& g, int32_t tangent_id, const glm::ve
     const size_t tri = g.triangle;
     glm::vec3 normal;
     if (!g.mesh->normals.empty()) {
-        normal = (1.0f - b.x - b.y) * g.mesh->normals[3 * tri] + b.x * g.mesh->normals[3 * tri + 1] +
-                 b.y * g.mesh->normals[3 * tri + 2];
+        normal = (1.0f - b.x - b.y) * g.mesh->corner_normal(tri, 0) + b.x * g.mesh->corner_normal(tri, 1) +
+                 b.y * g.mesh->corner_normal(tri, 2);
     } else {
         normal = object_normal(g, g.backfacing ? -g.Ng : g.Ng);  // the front face's geometric normal
     }
