@@ -65,7 +65,10 @@ def core_frame(args):
     frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
     core.render(frame.scene, frame.camera, frame.settings)  # warm-up: BVH, programs, first-touch memory
     runs = [core.render(frame.scene, frame.camera, frame.settings)[1] for _ in range(args.repeats)]
-    floors = sorted((core.ray_floor(frame.scene, frame.camera) for _ in range(3)), key=lambda f: f["seconds"])
+    # (ray_floor: absent from builds before issue 19, which the tool also times with --scripts of another build)
+    floor = getattr(core, "ray_floor", None)
+    floors = sorted((floor(frame.scene, frame.camera) for _ in range(3)), key=lambda f: f["seconds"]) if floor else [
+        None, None]
     seconds = {k: statistics.median(r["seconds"].get(k, 0.0) for r in runs) for k in STAGES + ["total"]}
     rays = {k: runs[-1]["counters"].get(f"rays.{k}", 0.0) for k in RAY_STAGES}
     return {"seconds": seconds, "rays": rays, "floor": floors[1], "radius": runs[-1]["values"]["radius"],
@@ -150,6 +153,8 @@ def markdown(records):
     lines.append("|---|---|---|---|---|")
     for r in records:
         floor = r["core"]["floor"]
+        if floor is None:
+            continue
         lines.append(f"| `{r['scene']}` | floor: primary rays, packets | {floor['rays'] / 1e6:.2f} | "
                      f"{floor['rays_per_second'] / 1e6:.1f} | 1.00 |")
         for stage in RAY_STAGES:
