@@ -109,20 +109,14 @@ RTCGeometry triangle_geometry(const EmbreeApi& rtc, RTCDevice device, const Mesh
 }
 
 // Whether an instance's triangles go into the top level in render space: its mesh is shown by no other instance
-// (a shared mesh is stored once, under instances), is under kPlacedTriangleLimit, and the instance lies within 64 of its own sizes of the render
-// origin, so that its corners, rounded in render space, lose at most 6 bits of what object space kept (as
-// MeshData's re-centring allows); farther out it stays an instance, exact in its own space.
+// (a shared mesh is stored once, under instances), is under kPlacedTriangleLimit, and the instance lies within 64
+// of its own sizes of the render origin, so that its corners, rounded in render space, lose at most 6 bits of
+// what object space kept (as MeshData's re-centring allows); farther out it stays an instance, exact in its own
+// space.
 bool places_triangles(const MeshData& mesh, const Instance& instance, uint32_t users) {
     if (users != 1 || is_flat(instance) || mesh.triangle_count() >= RayTracer::kPlacedTriangleLimit) return false;
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
-                          (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
-                          (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
-        const glm::vec3 q(instance.to_world * glm::vec4(p, 1.0f));
-        lo = glm::min(lo, q);
-        hi = glm::max(hi, q);
-    }
+    grow_by_instance_box(mesh, instance, lo, hi);
     const glm::vec3 reach = glm::max(glm::abs(lo), glm::abs(hi));
     const glm::vec3 extent = hi - lo;
     const float side = std::max(extent.x, std::max(extent.y, extent.z));

@@ -581,19 +581,23 @@ WorldTriangle Scene::world_triangle(uint32_t instance, uint32_t triangle) const 
 
 // The render-space box of every placed instance: its mesh's box corners through its transform. {+inf, −inf}
 // when nothing is placed.
+void grow_by_instance_box(const MeshData& mesh, const Instance& instance, glm::vec3& lo, glm::vec3& hi) {
+    for (int corner = 0; corner < 8; ++corner) {
+        const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
+                          (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
+                          (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
+        const glm::vec3 w(instance.to_world * glm::vec4(p, 1.0f));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+    }
+}
+
 std::pair<glm::vec3, glm::vec3> Scene::render_bounds() const {
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
     for (const Instance& instance : instances_) {
         const MeshData& mesh = meshes_[instance.mesh];
         if (instance_is_flat(instance) || mesh.triangle_count() == 0) continue;
-        for (int corner = 0; corner < 8; ++corner) {
-            const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
-                              (corner & 2) ? mesh.bounds_max.y : mesh.bounds_min.y,
-                              (corner & 4) ? mesh.bounds_max.z : mesh.bounds_min.z);
-            const glm::vec3 w(instance.to_world * glm::vec4(p, 1.0f));
-            lo = glm::min(lo, w);
-            hi = glm::max(hi, w);
-        }
+        grow_by_instance_box(mesh, instance, lo, hi);
     }
     return {lo, hi};
 }

@@ -142,6 +142,10 @@ struct Instance {
     float random = 0.0f;              // Cycles' per-object random number in [0, 1)
 };
 
+// The render-space box of an instance: its mesh's object-space box, corner by corner through to_world (grown
+// into lo, hi).
+void grow_by_instance_box(const MeshData& mesh, const Instance& instance, glm::vec3& lo, glm::vec3& hi);
+
 // One placed triangle in render space (corner positions only), e.g. for sampling emissive surfaces.
 struct WorldTriangle {
     glm::vec3 v0, v1, v2;
