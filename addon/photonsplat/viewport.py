@@ -24,7 +24,8 @@ from . import export, refine
 _sessions = weakref.WeakSet()
 
 # Longest wait on Blender's main thread for a refinement to stop before its scene is changed in place (a
-# cancelled pass ends within ~25 ms, one progress poll; an Embree build in progress may take longer, then a new scene is built).
+# cancelled pass ends within ~25 ms, one progress poll; an Embree build in progress may take longer, then a new
+# scene is built).
 RELEASE_WAIT = 0.5
 
 

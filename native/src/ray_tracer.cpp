@@ -216,7 +216,8 @@ void RayTracer::place_triangles(const MeshData& mesh, const Instance& instance, 
         vertices[3 * k + 0] = q.x;
         vertices[3 * k + 1] = q.y;
         vertices[3 * k + 2] = q.z;
-        if (std::isfinite(q.x + q.y + q.z)) scale = std::max(scale, std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z))));
+        if (std::isfinite(q.x + q.y + q.z))
+            scale = std::max(scale, std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z))));
     }
     rounding_[id] = std::max(scale, instance.rounding_scale);
 }

@@ -113,7 +113,8 @@ std::vector<float> pixel_sums(const ViewSamples& samples, const std::vector<glm:
     std::vector<float> image(pixels * 3, 0.0f);
     const std::vector<ViewSample>& v = samples.samples;
     const auto first_of = [&](size_t pixel) {
-        return std::partition_point(v.begin(), v.end(), [&](const ViewSample& s) { return s.pixel < pixel; }) - v.begin();
+        const auto before = [&](const ViewSample& s) { return s.pixel < pixel; };
+        return std::partition_point(v.begin(), v.end(), before) - v.begin();
     };
     for_pixel_blocks(pixels, [&](size_t first, size_t last) {
         for (size_t i = size_t(first_of(first)), end = size_t(first_of(last)); i < end; ++i) {

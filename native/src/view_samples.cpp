@@ -328,7 +328,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                             jx = jitter.uniform();
                             jy = jitter.uniform();
                         }
-                        camera_rays[k] = camera.generate_ray(static_cast<float>(x0 + k) + jx, static_cast<float>(y) + jy);
+                        camera_rays[k] =
+                            camera.generate_ray(static_cast<float>(x0 + k) + jx, static_cast<float>(y) + jy);
                         t_min[k] = 0.0f;
                         t_max[k] = camera.far_distance(camera_rays[k]);
                     }
