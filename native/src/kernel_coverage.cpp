@@ -130,7 +130,7 @@ bool alike(const ViewSample& a, const ViewSample& b, float radius) {
 }
 
 // Every kGridStep-th column and row is probed. At 3 the probe rays are 0.57 of a grid of 2 on the atrium at
-// 1080p (0.26 of probing every pixel; a pixel whose grid neighbours are not alike is probed too), and the 64-pass
+// 1080p (0.15 of probing every pixel; a pixel whose grid neighbours are not alike is probed too), and the 64-pass
 // images keep an SSIM of 0.9987 (Cornell box) and 0.998 (atrium) against the checkerboard's of db0ead1
 // (tools/progressive_ssim.py, 480 x 270); 4 saved little more (more pixels fell back to probing).
 constexpr int kGridStep = 3;
@@ -163,7 +163,7 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // The coverage changes over the kernel's width, many pixels wide: only the pixels of a grid (every
     // kGridStep-th column and row) are probed, and the others take the bilinear blend of the four grid pixels
     // around them, among those on the same flat surface (alike); where none is, they are probed too.
-    const int step = kGridStep;
+    constexpr int step = kGridStep;
     const int width = samples.width, height = samples.height;
     std::vector<uint32_t> first_sample(static_cast<size_t>(width) * height, UINT32_MAX);
     stats.bytes["kernel_coverage"] = static_cast<double>(coverage.capacity() * sizeof(float) +

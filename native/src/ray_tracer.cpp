@@ -145,26 +145,22 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
         if (!impl_->top) throw_on_embree_error(device, "creating the scene");
         // Dynamic: a moved object rebuilds its own part and the top, not the whole scene.
         rtc.rtcSetSceneFlags(impl_->top, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC);
+        impl_->instances.assign(instances.size(), nullptr);  // stays null for an empty mesh
         for (uint32_t i = 0; i < instances.size(); ++i) {
             const MeshData& mesh = meshes[instances[i].mesh];
-            if (mesh.triangle_count() == 0) {
-                impl_->instances.push_back(nullptr);
+            if (mesh.triangle_count() == 0) continue;
+            if (!placed_[i]) {
+                attach_instance(meshes, instances[i], i);
                 continue;
             }
-            impl_->instances.push_back(nullptr);
-            if (placed_[i]) {
-                RTCGeometry geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
-                impl_->instances[i] = geometry;  // owned from here on, released by ~Impl
-                place_triangles(mesh, instances[i], i);
-                bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
-                rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
-                rtc.rtcCommitGeometry(geometry);
-                // The geometry id is the instance index: hits name their instance directly.
-                rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
-                if (is_flat(instances[i])) rtc.rtcDisableGeometry(geometry);
-            } else {
-                attach_instance(meshes, instances[i], i);
-            }
+            RTCGeometry geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
+            impl_->instances[i] = geometry;  // owned from here on, released by ~Impl
+            place_triangles(mesh, instances[i], i);
+            bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+            rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
+            rtc.rtcCommitGeometry(geometry);
+            // The geometry id is the instance index: hits name their instance directly.
+            rtc.rtcAttachGeometryByID(impl_->top, geometry, i);
         }
         rtc.rtcCommitScene(impl_->top);
         throw_on_embree_error(device, "building the BVH");
