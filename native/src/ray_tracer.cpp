@@ -23,6 +23,16 @@ namespace {
 
 constexpr double kReach = 1e17;  // how far from an instance's origin a ray may start: inside Embree's 1.8e18
 
+// What a mesh's vertices and triangle indices take in an Embree scene.
+size_t mesh_bytes(const MeshData& mesh) {
+    return mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+}
+
+// The instance a hit belongs to: named in instID inside an instance; placed triangles are its own geometry.
+uint32_t hit_instance(unsigned inst_id, unsigned geom_id) {
+    return inst_id != RTC_INVALID_GEOMETRY_ID ? inst_id : geom_id;
+}
+
 // Embree asserts (aborting the process, Blender with it) on a ray with a non-finite or huge origin or direction,
 // or a negative or inverted range. Scene validation keeps such rays from being made; this is the last guard.
 bool embree_accepts(const Ray& ray, float t_min, float t_max) {
@@ -156,7 +166,7 @@ RayTracer::RayTracer(const std::vector<MeshData>& meshes, const std::vector<Inst
             RTCGeometry geometry = triangle_geometry(rtc, device, mesh, impl_->placed_vertices[i]);
             impl_->instances[i] = geometry;  // owned from here on, released by ~Impl
             place_triangles(mesh, instances[i], i);
-            bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+            bytes_ += mesh_bytes(mesh);
             rtc.rtcSetGeometryMask(geometry, instances[i].visibility);
             rtc.rtcCommitGeometry(geometry);
             // The geometry id is the instance index: hits name their instance directly.
@@ -181,7 +191,7 @@ RTCScene RayTracer::mesh_scene(const std::vector<MeshData>& meshes, uint32_t m) 
     RTCScene scene = mesh.bvh ? mesh.bvh->retain() : nullptr;
     if (!scene) scene = build_mesh_scene(mesh_buffers(mesh));
     impl_->meshes[m] = scene;
-    bytes_ += mesh.positions.size() * 3 * sizeof(float) + mesh.triangle_count() * 3 * sizeof(unsigned);
+    bytes_ += mesh_bytes(mesh);
     return scene;
 }
 
@@ -348,8 +358,7 @@ bool RayTracer::intersect(const Ray& original, float t_min, float t_max, Hit& hi
     impl_->rtc.rtcIntersect1(impl_->top, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar + shift;
-    // A hit inside an instance names it in instID; placed triangles are their instance's own geometry.
-    hit.instance = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0] : rh.hit.geomID;
+    hit.instance = hit_instance(rh.hit.instID[0], rh.hit.geomID);
     hit.triangle = rh.hit.primID;
     hit.u = rh.hit.u;
     hit.v = rh.hit.v;
@@ -399,7 +408,9 @@ void fill(const RayTracer::Packet& packet, uint32_t visibility, EmbreeRay8& r) {
 
 }  // namespace
 
-void RayTracer::clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const {
+int RayTracer::clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const {
+    count = std::clamp(count, 0, kPacketRays);
+    count_rays(static_cast<uint64_t>(count));
     for (int i = 0; i < kPacketRays; ++i) {
         packet.shift[i] = 0.0f;
         bool active = false;
@@ -410,13 +421,13 @@ void RayTracer::clip_packet(const Ray* rays, const float* t_min, const float* t_
         }
         packet.valid[i] = active ? -1 : 0;
     }
+    return count;
 }
 
 void RayTracer::intersect(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
                           Hit* hits, bool* found) const {
     Packet packet;
-    clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
-    count_rays(static_cast<uint64_t>(std::max(0, std::min(count, kPacketRays))));
+    count = clip_packet(rays, t_min, t_max, count, packet);
     RTCRayHit8 rh;
     fill(packet, visibility, rh.ray);
     for (int i = 0; i < kPacketRays; ++i) {
@@ -427,11 +438,11 @@ void RayTracer::intersect(const Ray* rays, const float* t_min, const float* t_ma
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     impl_->rtc.rtcIntersect8(packet.valid, impl_->top, &context, &rh);
-    for (int i = 0; i < std::min(count, kPacketRays); ++i) {
+    for (int i = 0; i < count; ++i) {
         found[i] = packet.valid[i] != 0 && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
         if (!found[i]) continue;
         hits[i].t = rh.ray.tfar[i] + packet.shift[i];
-        hits[i].instance = rh.hit.instID[0][i] != RTC_INVALID_GEOMETRY_ID ? rh.hit.instID[0][i] : rh.hit.geomID[i];
+        hits[i].instance = hit_instance(rh.hit.instID[0][i], rh.hit.geomID[i]);
         hits[i].triangle = rh.hit.primID[i];
         hits[i].u = rh.hit.u[i];
         hits[i].v = rh.hit.v[i];
@@ -441,15 +452,14 @@ void RayTracer::intersect(const Ray* rays, const float* t_min, const float* t_ma
 void RayTracer::occluded(const Ray* rays, const float* t_min, const float* t_max, int count, uint32_t visibility,
                          bool* blocked) const {
     Packet packet;
-    clip_packet(rays, t_min, t_max, std::min(count, kPacketRays), packet);
-    count_rays(static_cast<uint64_t>(std::max(0, std::min(count, kPacketRays))));
+    count = clip_packet(rays, t_min, t_max, count, packet);
     RTCRay8 r;
     fill(packet, visibility, r);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     impl_->rtc.rtcOccluded8(packet.valid, impl_->top, &context, &r);
-    for (int i = 0; i < std::min(count, kPacketRays); ++i)
+    for (int i = 0; i < count; ++i)
         blocked[i] = packet.valid[i] != 0 && r.tfar[i] == -std::numeric_limits<float>::infinity();
 }
 

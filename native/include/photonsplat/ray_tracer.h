@@ -74,7 +74,8 @@ private:
     ::RTCSceneTy* mesh_scene(const std::vector<MeshData>& meshes, uint32_t mesh);
     void attach_instance(const std::vector<MeshData>& meshes, const Instance& instance, uint32_t id);
     bool clip_to_scene(const Ray& original, float& t_min, float& t_max, Ray& ray, float& shift) const;
-    void clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const;
+    // Fills `packet` with the first min(count, kPacketRays) rays, clipped, counts them; returns that number.
+    int clip_packet(const Ray* rays, const float* t_min, const float* t_max, int count, Packet& packet) const;
 
     struct Impl;
     Impl* impl_;
