@@ -299,6 +299,35 @@ def add_random_camera(rng, scene, target, distance, box=None):
     return record
 
 
+# ---- scale and offset -----------------------------------------------------------------------------------------
+
+def transform_scene(scene, transform, scale):
+    """Applies `transform` (a uniform `scale`, then a move) to every object of `scene`, with what a uniform scale
+    does not carry by itself: the radius of point and spot lights (an area light's size follows its object's
+    scale), the lights' powers so that the same surfaces see the same irradiance (light transport is then scale
+    invariant), the orthographic camera's width and the clip range."""
+    for obj in scene.objects:
+        obj.matrix_world = transform @ obj.matrix_world
+        if obj.type == "LIGHT" and obj.data.type != "SUN":
+            obj.data.energy *= scale * scale
+            if obj.data.type != "AREA":
+                obj.data.shadow_soft_size *= scale
+        if obj.type == "CAMERA":
+            if obj.data.type == "ORTHO":
+                obj.data.ortho_scale *= scale
+            obj.data.clip_start *= scale
+            obj.data.clip_end *= scale
+
+
+def canonical(scene, record):
+    """Undoes the scale and the move of make_scene on the scene loaded from its file: the scene at scale 1 around
+    the origin, as drawn before it was scaled."""
+    scale, offset = record["scale"], Vector(record["offset"])
+    if scale != 1.0 or offset.length > 0:
+        bpy.context.view_layer.update()
+        transform_scene(scene, Matrix.Scale(1.0 / scale, 4) @ Matrix.Translation(-offset), 1.0 / scale)
+
+
 # ---- one scene ------------------------------------------------------------------------------------------------
 
 def make_scene(seed, width, height):
@@ -353,21 +382,7 @@ def make_scene(seed, width, height):
     record["scale"], record["offset"] = scale, tuple(offset)
     if scale != 1.0 or offset.length > 0:
         bpy.context.view_layer.update()  # matrix_world of what was just placed, before it is read
-        transform = Matrix.Translation(offset) @ Matrix.Scale(scale, 4)
-        for obj in scene.objects:
-            obj.matrix_world = transform @ obj.matrix_world
-            if obj.type == "LIGHT" and obj.data.type != "SUN":
-                obj.data.energy *= scale * scale  # the same irradiance on the scaled scene
-                if obj.data.type == "AREA":
-                    obj.data.size *= scale
-                    obj.data.size_y *= scale
-                else:
-                    obj.data.shadow_soft_size *= scale
-            if obj.type == "CAMERA":
-                if obj.data.type == "ORTHO":
-                    obj.data.ortho_scale *= scale
-                obj.data.clip_start *= scale
-                obj.data.clip_end *= scale
+        transform_scene(scene, Matrix.Translation(offset) @ Matrix.Scale(scale, 4), scale)
     scene["differential"] = json.dumps(record)
     return scene, record
 
