@@ -72,8 +72,8 @@ class PhotonSplatViewLayerSettings(bpy.types.PropertyGroup):
     )
     use_pass_caustics: BoolProperty(
         name="Caustics", default=False, update=_passes_changed,
-        description="Only the photons whose path was light, then mirrors/glass, then a diffuse surface "
-                    "(part of Indirect); costs a second splat of those photons",
+        description="Only the photons that met glass, a mirror or a glossy surface on their way (part of "
+                    "Indirect; what Cycles' Caustics toggles remove); costs a second splat of those photons",
     )
 
 

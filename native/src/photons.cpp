@@ -69,6 +69,32 @@ struct CausticWeighting {
     bool aimed = false;
 };
 
+// Whether the surface reflects diffusely in part (Lambert, Oren–Nayar, Principled diffuse, sheen, velvet): what
+// Cycles labels a diffuse reflection.
+bool has_diffuse_reflection(const Bsdf& b) {
+    if (b.lambert != glm::vec3(0.0f)) return true;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        const ClosureKind kind = b.lobes[k].kind;
+        if (kind == ClosureKind::diffuse || kind == ClosureKind::principled_diffuse || kind == ClosureKind::sheen ||
+            kind == ClosureKind::velvet)
+            return true;
+    }
+    return false;
+}
+
+// What a photon stored on the inside of a transmitting surface weighs there. Cycles carries radiance across a
+// refraction as (1 − F) times itself, in and out alike, without the (n_t / n_i)² by which physical radiance changes
+// (its sampled refraction weighs G / G1 (1 − F), its evaluation integrates to the same): the radiance a camera path
+// finds inside glass is the physical one over (n_inside / n_outside)². Photons carry physical power, so the
+// inside view samples get Cycles' radiance from photons scaled by (n_outside / n_inside)², the refraction's eta
+// seen from inside: 1 / ior² of the material's (first) refraction, which the Bsdf drops under total internal
+// reflection.
+float inside_photon_scale(const Material& m) {
+    for (const Closure& c : m.closures)
+        if (c.kind == ClosureKind::refraction && c.ior > 0.0f) return 1.0f / (c.ior * c.ior);
+    return 1.0f;
+}
+
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
@@ -79,6 +105,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
+    // Cycles' Caustics toggles drop a glossy part met right after a diffuse bounce (camera side), so light that
+    // met a glossy part counts as theirs where a diffuse part receives it: a later diffuse scatter, or a diffuse
+    // part of the surface that stores the photon (kGlossyPath). Light reaching a glossy-only surface is not.
+    bool glossy_so_far = false, glossy_then_diffuse = false;
     // Until its first scatter other than transparency, what the photon reaches is direct light, which shadow rays
     // (through transparent surfaces too) already count.
     bool direct = true;
@@ -95,7 +125,9 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
                 const bool caustic = only_specular_so_far;
                 out.push_back(Photon{s.position, -ray.direction, s.geometric_normal,
                                      caustic ? power * caustic_weight : power,
-                                     caustic ? static_cast<uint32_t>(kCaustic) : 0u});
+                                     (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
+                                         (glossy_so_far ? static_cast<uint32_t>(kGlossyPath) : 0u)});
+                glossy_then_diffuse = glossy_so_far;
             }
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
@@ -112,16 +144,21 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         }
         const Bsdf b = shade(scene, s, -ray.direction);
         if (!direct && bsdf_has(b, LobeSet::reflection)) {
-            const bool caustic = only_specular_so_far;
+            const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                   (inside_transmitter(s) ? static_cast<uint32_t>(kInsidePhoton) : 0u);
-            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
-                                 flags});
+                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
+                                   ((glossy_then_diffuse || (glossy_so_far && has_diffuse_reflection(b)))
+                                        ? static_cast<uint32_t>(kGlossyPath)
+                                        : 0u);
+            const float scale = (caustic ? caustic_weight : 1.0f) * (inside ? inside_photon_scale(m) : 1.0f);
+            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, power * scale, flags});
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
         }
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         const BsdfSample step = bsdf_sample(b, u0, u1, u2);
         if (step.kind == ScatterKind::none) return;
+        if (step.kind == ScatterKind::lobes && !step.glossy) glossy_then_diffuse = glossy_then_diffuse || glossy_so_far;
+        glossy_so_far = glossy_so_far || step.glossy;
         if (step.kind == ScatterKind::lobes) {
             if (weighting.aimed) return;
             only_specular_so_far = false;

@@ -80,12 +80,13 @@ std::optional<ClusterHierarchy> build_hierarchy(const Splatter& splatter, const 
 }
 
 // The photons a caustics output splats a second time, alone, over the same view samples and hierarchy: the same
-// estimate restricted to those photons.
+// estimate restricted to the photons that met a glossy, mirror or refracting surface (kGlossyPath), the light
+// Cycles' Caustics toggles remove, so that the pass measures what those toggles change.
 PhotonMap caustic_photons_of(const PhotonMap& photons) {
     PhotonMap caustic;
     caustic.emitted = photons.emitted;
     for (const Photon& p : photons.photons)
-        if (p.flags & kCaustic) caustic.photons.push_back(p);
+        if (p.flags & kGlossyPath) caustic.photons.push_back(p);
     return caustic;
 }
 

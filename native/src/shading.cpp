@@ -75,7 +75,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
     // Pick Lambert or a lobe by u0, then place the direction with u1, u2.
     float pick = u0 * c.total;
     glm::vec3 wi(0.0f);
-    bool picked = false;
+    bool picked = false, glossy = false;
     if (c.lambert > 0.0f) {
         if (pick < c.lambert) {
             wi = sample_cosine_hemisphere(b.n, u1, u2);
@@ -93,6 +93,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
             if (!(s.pdf > 0.0f)) return out;
             wi = s.direction;
             picked = true;
+            glossy = b.lobes[k].kind == ClosureKind::reflection || b.lobes[k].kind == ClosureKind::refraction;
         }
         pick -= c.lobe[k];
     }
@@ -107,6 +108,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
     out.weight = weight;
     out.pdf = pdf;
     out.transmitted = glm::dot(wi, b.ng) < 0.0f;
+    out.glossy = glossy;
     return out;
 }
 
@@ -303,6 +305,7 @@ BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     if (pick < w_mirror || (w_refraction <= 0.0f && w_transparent <= 0.0f)) {
         if (!(w_mirror > 0.0f)) return out;
         out.kind = ScatterKind::mirror;
+        out.glossy = true;
         out.direction = mirror_direction(b);
         out.weight = b.mirror * (total / w_mirror);
         return out;
@@ -311,6 +314,7 @@ BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     if (pick < w_refraction || w_transparent <= 0.0f) {
         if (!(w_refraction > 0.0f) || !refraction_direction(b, out.direction)) return out;
         out.kind = ScatterKind::refraction;
+        out.glossy = true;
         out.weight = b.refraction * (total / w_refraction);
         out.transmitted = true;
         return out;

@@ -16,6 +16,10 @@ enum PhotonFlags : uint32_t {
     kCaustic = 1u,  // path light → specular+ → this diffuse hit (L S+ D)
     kInsidePhoton = 2u,  // stored on the back face of a transmitting surface (inside glass): splats only onto view
                          // samples there too, never through the surface onto what lies close outside (splat.h)
+    // The path scattered off a glossy, mirror or refracting part (not diffuse, translucent or transparent) and then
+    // reached a diffuse part (a later diffuse bounce, or this surface's own diffuse reflection): the light that
+    // Cycles' Caustics toggles (Light Paths) remove, and the engine's Caustics pass.
+    kGlossyPath = 4u,
 };
 
 struct Photon {

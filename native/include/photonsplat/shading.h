@@ -73,6 +73,9 @@ struct BsdfSample {
     glm::vec3 weight{0.0f};  // f |cos| / pdf for lobes; delta weight / choice probability for the rest
     float pdf = 0.0f;        // lobes only: bsdf_pdf of direction for the set sampled (for MIS); 0 for delta parts
     bool transmitted = false;  // the direction leaves on the other side (offset the next ray there)
+    // A microfacet lobe, the mirror or the refraction was chosen: what Cycles labels glossy or transmission (its
+    // Caustics toggles), as against diffuse, translucent, sheen, velvet and transparency.
+    bool glossy = false;
 };
 // Samples the whole closure sum: a part chosen in proportion to its sampling weight (the delta parts' luminance,
 // the lobes' lobe_sampling_weight), then a direction. u0 chooses, u1 and u2 place. Non-delta samples carry
