@@ -9,11 +9,12 @@ Each seed gives one scene that nobody designed around the engine, drawn with Pyt
   - a material each, of every kind the engine translates: Diffuse (Lambert or Oren-Nayar), Glossy (GGX,
     Beckmann, Multiscatter GGX, any roughness), sharp and rough Glass, Principled (dielectric, metal, glass,
     with clearcoat and sheen), a Mix of two of them, Emission, Translucent, Transparent;
-  - 1 to 3 lights of every type (point, spot, area square/rectangle/disk/ellipse, sun) with random sizes, spot
-    angles and blends, and powers scaled to their distance so that the image is neither black nor white;
+  - 1 to 3 lights of every type (point, spot, area square/rectangle/disk/ellipse, sun) with random sizes (never
+    0: Cycles cannot render a delta light's caustics), spot angles and blends, and powers scaled to their distance
+    so that the image is neither black nor white;
   - a perspective (18 to 85 mm) or orthographic camera looking at the objects from a random direction;
   - a world of random constant colour and strength;
-  - the whole scene sometimes scaled by 0.01 or 100 and sometimes moved 1e3 to 1e5 away from the origin.
+  - the whole scene sometimes scaled by 0.01 or 100 and sometimes moved 1e3 to 1e5 of its own sizes from the origin.
 What was drawn is kept in the scene's custom property `differential` (JSON), for the runner's report.
 
 Cycles is set up as the oracle (CPU, no denoising, no clamping, Filmic off: Standard view); with the add-on on
@@ -250,11 +251,13 @@ def add_light(rng, kind, name, target, distance, box=None):
     if kind == "sun":
         data = bpy.data.lights.new(name, "SUN")
         record["strength"] = data.energy = rng.uniform(1.0, 6.0)
-        record["angle_degrees"] = rng.choice([0.0, rng.uniform(0.5, 20.0)])
+        # Every light has a size (a 0 drawn becomes the smallest size): Cycles, the oracle, cannot find a delta
+        # light's caustics (light, then mirror or sharp glass, then a diffuse surface) by path tracing at all.
+        record["angle_degrees"] = rng.choice([0.0, rng.uniform(0.5, 20.0)]) or 0.5
         data.angle = math.radians(record["angle_degrees"])
     elif kind in ("point", "spot"):
         data = bpy.data.lights.new(name, kind.upper())
-        record["radius"] = data.shadow_soft_size = rng.choice([0.0, rng.uniform(0.01, 0.3) * distance])
+        record["radius"] = data.shadow_soft_size = rng.choice([0.0, rng.uniform(0.01, 0.3) * distance]) or 0.01 * distance
         record["watts"] = data.energy = rng.uniform(20.0, 120.0) * distance * distance
         if kind == "spot":
             record["spot_degrees"] = rng.uniform(20.0, 120.0)
@@ -375,10 +378,12 @@ def make_scene(seed, width, height):
     record["camera"] = add_random_camera(rng, scene, target, 0.45 * max(size[0], size[1]),
                                          size if layout == "room" else None)
 
-    # The whole scene scaled, and moved far from the origin, now and then.
+    # The whole scene scaled, and moved far from the origin, now and then: 1e3 to 1e5 of its own sizes. Blender
+    # keeps object matrices in single precision, so a scene moved further than that relative to its size is no
+    # longer the scene drawn (a 5 cm scene 2e4 away moves its objects by up to 2 mm in Blender itself).
     scale = rng.choice([1.0] * 8 + [0.01, 100.0])
     offset = Vector((0, 0, 0)) if rng.random() < 0.85 else Vector(
-        (rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))).normalized() * 10 ** rng.uniform(3, 5)
+        (rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))).normalized() * 10 ** rng.uniform(3, 5) * scale
     record["scale"], record["offset"] = scale, tuple(offset)
     if scale != 1.0 or offset.length > 0:
         bpy.context.view_layer.update()  # matrix_world of what was just placed, before it is read
