@@ -54,17 +54,7 @@ SEEDS = 4           # Cycles renders per round, with different seeds: their spre
 
 
 # What was measured about failures the export does not note (25 Nov 2026, at the commit of the closures work).
-_ROUGH_GLASS = (
-    "Diagnosed, not fixed: the excess lies in the sphere's lower half, where the floor's caustic from the sun "
-    "and the point light, made by rough glass, is seen through rough glass (hot blocks of 1.4-1.9x beside "
-    "darker ones). In a scene rebuilt from arrays (the same sphere, floor and lights) the sphere's ratio to the "
-    "reference moves with convergence on both sides: 0.79 -> 0.90 from 16 to 64 iterations under the point "
-    "light alone, 1.036 -> 1.028 from 256 to 2048 reference samples under the 2-degree sun, and 1.00 under a "
-    "20-degree sun; under the uniform world alone 0.97. Neither estimate is converged for light from small "
-    "lights through two rough interfaces; worth an issue of its own.")
 DIAGNOSED = {
-    "glass_ggx_0.3": _ROUGH_GLASS,
-    "principled_transmission_1_rough_0.3": _ROUGH_GLASS,
     "glossy_multiggx_0.5": (
         "The reference agrees with Photon Splat (0.917): the closure, not the pipeline. Our multiscatter GGX "
         "matches Cycles' random walk in a white furnace within 0.85 % (docs/closures.md); Cycles evaluates "

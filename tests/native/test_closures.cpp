@@ -522,17 +522,6 @@ TEST(ClosureFurnace, Table) {
     }
 }
 
-TEST(ClosureFurnace, ClearcoatGainsOnlyWithoutItsFresnel) {
-    // Cycles' clearcoat: GTR1 normals with GGX masking at a fixed α = 0.25, which is not the masking of GTR1, so
-    // with F = 1 it reflects more than it receives at grazing view and rough α (measured 2.34 at α = 1, cos 0.1).
-    // With its own dielectric Fresnel (IOR 1.5) it stays well below 1.
-    const glm::vec3 grazing = dir(0.1f, 0.3f);
-    EXPECT_GT(furnace(microfacet(ClosureKind::reflection, Distribution::gtr1, 1.0f), grazing, 20000).albedo, 1.5);
-    for (float a : {0.05f, 0.4f, 1.0f})
-        EXPECT_LT(furnace(microfacet(ClosureKind::reflection, Distribution::gtr1, a, FresnelKind::dielectric),
-                          grazing, 20000).albedo, 0.7);
-}
-
 TEST(ClosureFurnace, PrincipledDiffuseFollowsBurleyIncludingItsGain) {
     // Burley's retro-reflection is not energy conserving and Cycles keeps it so: at grazing view, roughness 1
     // reflects ~1.5× the light; roughness 0 darkens the edges instead. Measured values (docs/closures.md).
@@ -568,6 +557,40 @@ SphereEstimate sphere_estimate(const Lobe& l, const glm::vec3& wo, int samples) 
             std::sqrt(std::max(0.0, p2 / n - (p / n) * (p / n)) / n)};
 }
 
+TEST(ClosureFurnace, ClearcoatGainsOnlyWithoutItsFresnel) {
+    // Cycles' clearcoat: GTR1 normals with GGX masking at a fixed α = 0.25, which is not the masking of GTR1, so
+    // with F = 1 it reflects more than it receives at grazing view and rough α (∫ f cos measured 2.34 at α = 1,
+    // cos 0.1). With its own dielectric Fresnel (IOR 1.5) it stays well below 1.
+    const glm::vec3 grazing = dir(0.1f, 0.3f);
+    EXPECT_GT(sphere_estimate(microfacet(ClosureKind::reflection, Distribution::gtr1, 1.0f), grazing, 60000).albedo,
+              1.5);
+    for (float a : {0.05f, 0.4f, 1.0f})
+        EXPECT_LT(sphere_estimate(microfacet(ClosureKind::reflection, Distribution::gtr1, a, FresnelKind::dielectric),
+                                  grazing, 60000).albedo, 0.7);
+}
+
+TEST(ClosureSampling, ClearcoatIsSampledAsCyclesSamplesIt) {
+    // Cycles 3.4 samples the clearcoat with GGX visible normals of its α and reports G1(wo) D_GTR1 / (4 wo.z) as
+    // the density, so a sampled direction weighs F G1(wi) (GGX masking at α = 0.25): its bsdf_microfacet_ggx_sample.
+    for (float a : {0.03f, 0.1f, 0.5f}) {
+        const Lobe l = microfacet(ClosureKind::reflection, Distribution::gtr1, a, FresnelKind::dielectric);
+        for (float c : {0.9f, 0.4f}) {
+            const glm::vec3 wo = dir(c, 0.8f);
+            Rng rng(9, RngDomain::camera, 0);
+            for (int i = 0; i < 200; ++i) {
+                const LobeSample s = lobe_sample(l, kN, wo, rng.uniform(), rng.uniform());
+                if (!(s.pdf > 0.0f)) continue;
+                const glm::vec3 h = glm::normalize(s.direction + wo);
+                const float cos_i = s.direction.z, tan2 = (1.0f - cos_i * cos_i) / (cos_i * cos_i);
+                const float g1i = 2.0f / (1.0f + std::sqrt(1.0f + 0.0625f * tan2));
+                const float fresnel = fresnel_dielectric_cos(glm::dot(s.direction, h), l.eta);
+                const float weight = s.f.x * cos_i / s.pdf;
+                ASSERT_NEAR(weight, l.weight.x * fresnel * g1i, 2e-3f) << "alpha " << a << " cos " << c;
+            }
+        }
+    }
+}
+
 TEST(ClosureSampling, SampledAndUniformEstimatesAgreeAndPdfsMatch) {
     std::vector<Lobe> lobes;
     Lobe l = white(ClosureKind::diffuse);
@@ -601,11 +624,15 @@ TEST(ClosureSampling, SampledAndUniformEstimatesAgreeAndPdfsMatch) {
             const Furnace sampled = furnace(lobe, wo, 20000, 3);
             const SphereEstimate uniform = sphere_estimate(lobe, wo, 60000);
             const double sigma = std::sqrt(sampled.sigma * sampled.sigma + uniform.albedo_sigma * uniform.albedo_sigma);
-            EXPECT_NEAR(sampled.albedo, uniform.albedo, 4.5 * sigma + 1e-3) << describe(lobe) << " cos " << c;
-            // The pdf integrates to the fraction of samples that succeed (<= 1).
-            EXPECT_LE(uniform.pdf_integral, 1.0 + 4.5 * uniform.pdf_sigma) << describe(lobe);
-            EXPECT_NEAR(uniform.pdf_integral, sampled.success, 4.5 * uniform.pdf_sigma + 0.01)
-                << describe(lobe) << " cos " << c;
+            // Not the clearcoat, whose density is the one Cycles reports, not its sampler's
+            // (ClosureSampling.ClearcoatIsSampledAsCyclesSamplesIt).
+            if (lobe.distribution != Distribution::gtr1) {
+                EXPECT_NEAR(sampled.albedo, uniform.albedo, 4.5 * sigma + 1e-3) << describe(lobe) << " cos " << c;
+                // The pdf integrates to the fraction of samples that succeed (<= 1).
+                EXPECT_LE(uniform.pdf_integral, 1.0 + 4.5 * uniform.pdf_sigma) << describe(lobe);
+                EXPECT_NEAR(uniform.pdf_integral, sampled.success, 4.5 * uniform.pdf_sigma + 0.01)
+                    << describe(lobe) << " cos " << c;
+            }
             // lobe_eval's pdf and f at a sampled direction are lobe_sample's.
             Rng rng(5, RngDomain::camera, 0);
             for (int i = 0; i < 200; ++i) {
