@@ -2,7 +2,7 @@
 # The sanitizer and fuzzing part of the README test command (scripts/test.sh runs it):
 #   1. AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan, gcc) of the core and the WHOLE native suite;
 #   2. ThreadSanitizer build (build-tsan, gcc) running the cross-thread control tests (see below why not more);
-#   3. a clang libFuzzer build (build-fuzz) of fuzz/fuzz_render.cpp, run for PHOTONSPLAT_FUZZ_SECONDS (60) from
+#   3. a clang libFuzzer build (build-fuzz) of fuzz/fuzz_render.cpp, run for PHOTONSPLAT_FUZZ_SECONDS (30) from
 #      the seed corpus fuzz/corpus.tar.gz (unpacked into a scratch directory, where new inputs go too) and the
 #      reproducers in fuzz/regressions/ (see docs/robustness.md, Fuzzing).
 # (One clang tree for the suite and the fuzzer would save a build, but one existing test,
@@ -11,7 +11,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 steps="${PHOTONSPLAT_SANITIZE_STEPS-asan tsan fuzz}"
-fuzz_seconds="${PHOTONSPLAT_FUZZ_SECONDS:-60}"
+fuzz_seconds="${PHOTONSPLAT_FUZZ_SECONDS:-30}"
 jobs="$(nproc)"
 status=0
 

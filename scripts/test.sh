@@ -3,7 +3,7 @@
 # the Python API tests (pytest on /usr/bin/python3), the Blender tests under Blender 3.4, 4.5 LTS and 5.0
 # (scripts/blender_suite.sh: pytest inside blender -b, and in the pip bpy modules of build/bpy-*), the
 # real-window viewport test (Blender under Xvfb; its screenshot stays in build/test-artifacts/), and the
-# sanitizer and fuzzing runs of scripts/sanitize.sh (ASan+UBSan suite, TSan on cross-thread control, 60 s of
+# sanitizer and fuzzing runs of scripts/sanitize.sh (ASan+UBSan suite, TSan on cross-thread control, 30 s of
 # libFuzzer; PHOTONSPLAT_SANITIZE_STEPS="" skips them, e.g. for a quick local run).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
