@@ -35,6 +35,8 @@ import bpy
 from mathutils import Euler, Matrix, Vector
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # for scene_kit
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))  # for differential (its seed lists)
+from differential import parse_seeds  # noqa: E402
 from scene_kit import new_empty_scene  # noqa: E402
 
 SHAPES = ["cube", "uv_sphere", "ico_sphere", "cylinder", "torus", "monkey", "wall"]
@@ -50,17 +52,6 @@ def parse_args():
     parser.add_argument("--seeds", default="0-199", help="e.g. 0-199 or 3,7,12")
     parser.add_argument("--size", default="64x64", help="render resolution WxH")
     return parser.parse_args(argv)
-
-
-def parse_seeds(text):
-    seeds = []
-    for part in text.split(","):
-        if "-" in part:
-            a, b = part.split("-")
-            seeds += range(int(a), int(b) + 1)
-        else:
-            seeds.append(int(part))
-    return seeds
 
 
 def colour(rng, low=0.05, high=0.9):

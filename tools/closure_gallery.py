@@ -630,12 +630,14 @@ def write_sheet(rows, path, np):
     print(f"closure_gallery: wrote {path}")
 
 
-if __name__ == "__main__":
+def entry_point(host_main, blender_main):
+    """A tool's `__main__`: `blender_main(argv)` inside Blender (argv after "--"; a failure exits 1, so that the
+    host sees it), `host_main(argv)` outside."""
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
     try:
         import bpy  # noqa: F401
     except ImportError:
-        run_in_blender(argv)
+        host_main(argv)
     else:
         try:
             blender_main(argv)
@@ -643,3 +645,7 @@ if __name__ == "__main__":
             import traceback
             traceback.print_exc()
             sys.exit(1)
+
+
+if __name__ == "__main__":
+    entry_point(run_in_blender, blender_main)
