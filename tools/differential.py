@@ -28,8 +28,9 @@ Per scene:
     machine's load changes least), with its Caustics pass.
 Figures:
   - mean ratio: the image mean (RGB averaged) over Cycles', at 16 s; the reference's likewise.
-  - caustic energy ratio: the engine's Caustics pass (light -> delta+ -> diffuse) over Cycles' excess with its
-    Caustics toggles on over off, for scenes whose excess is above 2 % of the image and three times its noise.
+  - caustic energy ratio: the engine's Caustics pass (light that met a glossy, mirror or refracting part, then a
+    diffuse one: what Cycles' Caustics toggles remove) over Cycles' excess (those toggles on minus off), for
+    scenes whose excess is above 2 % of the image and three times its noise.
   - block relMSE: over 8 x 8 pixel blocks, mean of (P - C)^2 / (C^2 + (0.01 mean(C))^2) of the blocks' RGB
     means; minus Cycles' own share (the variance of its blocks, from its two seeds), floored at 1e-7. The
     slope is the log-log slope of that excess between 4 and 16 s.
