@@ -107,18 +107,20 @@ def block_means(image, block=BLOCK):
     return rgb.reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3))
 
 
-def block_relmse(image, oracle, oracle_spread=None):
+def block_relmse(image, oracle, oracle_spread=None, keep=None):
     """Relative MSE over blocks of `image` against `oracle` (the Cycles mean), and Cycles' own share of it when the
     half difference of its two seeds per pixel (`oracle_spread`, its absolute value will do) is given:
     (raw, cycles_share). The half difference squared estimates the variance of the pair's mean in each pixel;
-    a block's is their sum over the block's pixels squared (Cycles' pixels are sampled independently)."""
+    a block's is their sum over the block's pixels squared (Cycles' pixels are sampled independently). `keep`: a
+    mask of the blocks to average over (default all)."""
     import numpy as np
     p, c = block_means(image), block_means(oracle)
+    keep = np.ones(c.shape, bool) if keep is None else keep
     denominator = c * c + (0.01 * max(float(c.mean()), 1e-12)) ** 2
-    raw = float(np.mean((p - c) ** 2 / denominator))
+    raw = float(np.mean(((p - c) ** 2 / denominator)[keep]))
     share = 0.0
     if oracle_spread is not None:
-        share = float(np.mean(block_means(np.square(oracle_spread)) / (BLOCK * BLOCK) / denominator))
+        share = float(np.mean((block_means(np.square(oracle_spread)) / (BLOCK * BLOCK) / denominator)[keep]))
     return raw, share
 
 
@@ -136,12 +138,10 @@ def caustic_free_slope(images, t0=4.0, t1=16.0):
     keep = (np.abs(on - off) <= 0.02 * np.abs(on) + 1e-12) & (block_means(images["caustics"]) <= 0.02 * np.abs(on))
     if keep.sum() < 8:
         return None
-    denominator = on * on + (0.01 * max(float(on.mean()), 1e-12)) ** 2
-    share = block_means(np.square(images["cycles_spread"])) / (BLOCK * BLOCK) / denominator
     errors = {}
     for t, key in ((t0, k0), (t1, k1)):
-        p = block_means(images[key])
-        errors[t] = max(float(np.mean(((p - on) ** 2 / denominator - share)[keep])), 1e-7)
+        raw, share = block_relmse(images[key], images["cycles"], images["cycles_spread"], keep)
+        errors[t] = max(raw - share, 1e-7)
     return slope(errors, t0, t1)
 
 
@@ -159,12 +159,15 @@ def cpu_seconds():
     return r.ru_utime + r.ru_stime
 
 
-def material_kinds(record):
-    kinds = set()
+def materials_of(record):
+    """Every material drawn for the scene, and the two parts of each Mix."""
     for m in record["materials"].values():
-        kinds.add(m["kind"])
-        kinds.update(part["kind"] for part in m.get("parts", []))
-    return kinds
+        yield m
+        yield from m.get("parts", [])
+
+
+def material_kinds(record):
+    return {m["kind"] for m in materials_of(record)}
 
 
 def has_caustic_surfaces(record):
@@ -217,9 +220,7 @@ def blender_main(argv):
                             samples=samples, noise=noise, seconds=seconds)
         return mean, spread, samples, noise, seconds, False
 
-    def photonsplat_progressive(scene):
-        scene.render.engine = 'PHOTONSPLAT'
-        frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    def photonsplat_progressive(frame):
         settings = frame.settings
         settings.iterations = 1_000_000
         settings.time_limit = 0.0
@@ -238,9 +239,7 @@ def blender_main(argv):
                             "cpu": (cpu_seconds() - start) / args.threads}
         return snapshots, list(frame.warnings), time.perf_counter() - wall
 
-    def reference_image(scene):
-        scene.render.engine = 'PHOTONSPLAT'
-        frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    def reference_image(frame):
         t0 = time.perf_counter()
         image, stats = core.render_reference(frame.scene, frame.camera, samples=args.reference_samples, seed=1,
                                              threads=args.threads, max_bounces=BOUNCES)
@@ -274,8 +273,10 @@ def blender_main(argv):
               f"{'cached' if cached else f'{cyc_seconds + off_seconds:.1f} s'})", flush=True)
         if args.cycles_only:
             continue
-        snapshots, warnings, ps_seconds = photonsplat_progressive(scene)
-        ref, ref_seconds = reference_image(scene)
+        scene.render.engine = 'PHOTONSPLAT'
+        frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())  # one export for both renders
+        snapshots, warnings, ps_seconds = photonsplat_progressive(frame)
+        ref, ref_seconds = reference_image(frame)
 
         c_mean = image_mean(cyc)
         excess = c_mean - image_mean(cyc_off)
@@ -358,12 +359,6 @@ def main(argv):
 
 # Known causes of a difference from Cycles, each with the test that tells whether a scene holds it (from what was
 # drawn and what the export noted) and what was measured. The report names them beside the scenes flagged.
-def _materials(record):
-    for m in record["materials"].values():
-        yield m
-        yield from m.get("parts", [])
-
-
 CAUSES = {
     "multiscatter GGX glass": (
         lambda r: any("multiscatter GGX glass" in w for w in r["warnings"]),
@@ -372,13 +367,13 @@ CAUSES = {
         "Cycles' 0.64 at scale 1)"),
     "multiscatter GGX near 0.02": (
         lambda r: any(m["kind"] == "glossy" and m.get("distribution") == "MULTI_GGX" and 0 < m["roughness"] <= 0.03
-                      for m in _materials(r["record"])),
+                      for m in materials_of(r["record"])),
         "Cycles 3.4's Multiscatter GGX at roughness 0.02 shows almost none of a small light's reflection (seed 14's "
         "floor: 0.230 in Cycles against 0.509 with GGX, the reference 0.508 for both): its BSDF-sampled light hits "
         "are lost. Cycles', not matched"),
     "multiscatter GGX shape": (
         lambda r: any(m["kind"] == "glossy" and m.get("distribution") == "MULTI_GGX" and m["roughness"] >= 0.3
-                      for m in _materials(r["record"])),
+                      for m in materials_of(r["record"])),
         "the engine's Multiscatter GGX adds the energy single scattering loses as a cosine lobe, which matches "
         "Cycles' albedo (white furnace within 0.85 %, docs/closures.md) but not the shape of its random-walk "
         "evaluation: seed 55's floor (roughness 0.76) under a sun is 0.80 of Cycles in Photon Splat and the "
