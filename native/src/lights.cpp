@@ -361,7 +361,8 @@ LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3
             const float det = uu * vv - uv * uv;
             if (!(det > 0.0f)) return out;
             const float a = (qu * vv - qv * uv) / det, b = (qv * uu - qu * uv) / det;
-            if (!(std::fabs(a) <= 0.5f && std::fabs(b) <= 0.5f)) return out;
+            const bool inside = light.ellipse ? a * a + b * b <= 0.25f : std::fabs(a) <= 0.5f && std::fabs(b) <= 0.5f;
+            if (!inside) return out;
             out = {true, t, light.value, t * t / (cos_light * light.area())};
             return out;
         }
