@@ -318,7 +318,8 @@ def blender_main(argv):
         print(f"differential: seed {seed}: mean {ps['mean_ratio']:.3f}, reference "
               f"{result['reference']['mean_ratio']:.3f}, caustic "
               f"{'-' if result['caustic_ratio'] is None else format(result['caustic_ratio'], '.3f')}, slope "
-              f"{ps['slope']:.2f}, {last['iterations']} iterations {' '.join(result['flags'])}", flush=True)
+              f"{'-' if ps['slope'] is None else format(ps['slope'], '.2f')}, {last['iterations']} iterations "
+              f"{' '.join(result['flags'])}", flush=True)
 
 
 def flags_of(result):
@@ -389,10 +390,19 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
 - **Rough glass seen from outside was too bright** (light transport, a unit). Cycles carries radiance across a
   refraction as (1 − F) times itself, without the (n_t / n_i)² of physical radiance, so the radiance a camera path
   finds inside glass is the physical one over ior²; photons carry physical power, and the inside view samples of
-  rough glass were ior² too bright. Photons stored inside glass now weigh 1/ior² (`inside_photon_scale` in
-  `native/src/photons.cpp`). Seed 39 (rough glass, ior 1.81): its glass blocks 2.7× Cycles → 1.0–1.3×, the image
-  1.044 → 1.015; the closure gallery's `glass_ggx_0.3` 1.205 → 1.003 and `principled_transmission_1_rough_0.3`
-  1.161 → 0.981 (docs/results/closure_gallery.md).
+  rough glass were ior² too bright. A photon's power now takes 1/eta² wherever it refracts (eta = n_t / n_i:
+  `photon_units_across` in `native/src/shading.cpp`), so those inside a glass object weigh 1/ior² and those that
+  left it 1 again. Seed 39 (rough glass, ior 1.81): its glass blocks 2.7× Cycles → 1.0–1.3×, the image 1.044 →
+  1.015; the closure gallery's `glass_ggx_0.3` 1.205 → 1.003 and `principled_transmission_1_rough_0.3` 1.161 →
+  0.981 (docs/results/closure_gallery.md).
+- **A light reflected in a thin rough glass pane seen from behind was 1/ior² of Cycles** (a unit, as above). The
+  first fix weighed every photon stored on a glass surface's back face 1/ior², also those that reached a one-sided
+  pane's back face through the air and never refracted; the weight now follows the refractions a photon made.
+  Seed 152 (a rough glass wall, ior 1.99, seen from its back face, reflecting an area light by a mirror floor):
+  its highlight blocks 0.14–0.29 of Cycles, the image 0.875 → 0.986.
+- **Disk and ellipse lights were seen as their rectangle** (a light's shape): the camera's and the BSDF-sampled
+  rays tested the bounding rectangle (`intersect_light`), so a directly seen disk light was 4/π too bright in
+  Photon Splat and the reference alike. Seed 156 (an ellipse light in view): 1.256 → see the table.
 - **A clearcoat's highlight of a small light was dimmer than Cycles'** (a sampling convention of Cycles). Cycles
   samples the clearcoat with GGX visible normals but reports the GTR1 density, so its estimate of a small light's
   highlight is brighter than GTR1's; the engine and the reference sampled GTR1 exactly and both showed 0.71 of

@@ -82,19 +82,6 @@ bool has_diffuse_reflection(const Bsdf& b) {
     return false;
 }
 
-// What a photon stored on the inside of a transmitting surface weighs there. Cycles carries radiance across a
-// refraction as (1 − F) times itself, in and out alike, without the (n_t / n_i)² by which physical radiance changes
-// (its sampled refraction weighs G / G1 (1 − F), its evaluation integrates to the same): the radiance a camera path
-// finds inside glass is the physical one over (n_inside / n_outside)². Photons carry physical power, so the
-// inside view samples get Cycles' radiance from photons scaled by (n_outside / n_inside)², the refraction's eta
-// seen from inside: 1 / ior² of the material's (first) refraction, which the Bsdf drops under total internal
-// reflection.
-float inside_photon_scale(const Material& m) {
-    for (const Closure& c : m.closures)
-        if (c.kind == ClosureKind::refraction && c.ior > 0.0f) return 1.0f / (c.ior * c.ior);
-    return 1.0f;
-}
-
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
@@ -150,8 +137,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
                                    ((glossy_then_diffuse || (glossy_so_far && has_diffuse_reflection(b)))
                                         ? static_cast<uint32_t>(kGlossyPath)
                                         : 0u);
-            const float scale = (caustic ? caustic_weight : 1.0f) * (inside ? inside_photon_scale(m) : 1.0f);
-            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal, power * scale, flags});
+            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal,
+                                 caustic ? power * caustic_weight : power, flags});
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
         }
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
@@ -169,7 +156,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         // Russian roulette on the weight keeps every surviving photon's power near the emitted one.
         const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-        power *= step.weight / keep;
+        power *= step.weight * (photon_units_across(b, step) / keep);
         if (step.kind == ScatterKind::lobes && !(glm::dot(step.direction, step.transmitted ? -s.geometric_normal
                                                                                             : s.geometric_normal) > 0.0f))
             return;

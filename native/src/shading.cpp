@@ -286,6 +286,20 @@ float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi) {
     return choice_pdf(b, lobes, wi) * (lobes.total / total);
 }
 
+float photon_units_across(const Bsdf& b, const BsdfSample& s) {
+    if (s.kind == ScatterKind::refraction) return 1.0f / (b.refraction_eta * b.refraction_eta);
+    if (s.kind != ScatterKind::lobes || !s.transmitted) return 1.0f;
+    float refracted = 0.0f, total = 0.0f;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (!is_transmission(b.lobes[k])) continue;
+        const float f = luminance(lobe_eval(b.lobes[k], b.n, s.direction, b.wo).f);
+        if (!(f > 0.0f)) continue;
+        total += f;
+        refracted += b.lobes[k].kind == ClosureKind::refraction ? f / (b.lobes[k].eta * b.lobes[k].eta) : f;
+    }
+    return total > 0.0f ? refracted / total : 1.0f;
+}
+
 BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
     const float w_mirror = luminance(b.mirror), w_refraction = luminance(b.refraction),

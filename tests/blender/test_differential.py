@@ -31,7 +31,8 @@ ITERATIONS = 24
 # of Cycles there and cover rooms and open scenes, scales 0.01 and 100, and most material kinds (no sharp Glass BSDF:
 # its caustics are where Cycles is least converged; seed 30, the caustic scene, has Principled glass).
 SAMPLE = {
-    39: ("rough glass seen from outside: photons stored inside glass weigh 1/ior^2 (its glass was 2.7x Cycles)",
+    39: ("rough glass seen from outside: a photon's power takes 1/eta^2 where it refracts (its glass was 2.7x "
+         "Cycles)",
          0.03, (0.5, 2.2)),
     9: ("a clearcoat floor's highlight of a small point light: the clearcoat is sampled as Cycles samples it "
         "(that block was 0.71 of Cycles)", 0.03, (0.85, 1.3)),

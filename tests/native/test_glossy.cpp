@@ -457,6 +457,92 @@ TEST(GlossyPhotons, NearSmoothGlossyIsAMirrorThatMakesCaustics) {
     EXPECT_GT(stats.counters.at("caustic_photons_stored"), 1000.0);
 }
 
+// Photons and rough glass, in Cycles' units: Cycles carries radiance across a refraction as (1 − F) times itself,
+// without the eta² of physical radiance, so a photon's power takes 1/eta² where it refracts (shading.h,
+// photon_units_across). A one-sided pane of rough glass (normal up) over a white floor.
+Material rough_pane(float ior, bool reflects) {
+    Material m;
+    m.name = "pane";
+    m.kind = MaterialKind::closures;
+    Closure refraction;
+    refraction.kind = ClosureKind::refraction;
+    refraction.color = glm::vec3(1.0f);
+    refraction.alpha_x = refraction.alpha_y = 0.09f;
+    refraction.ior = ior;
+    m.closures.push_back(refraction);
+    if (reflects) {
+        Closure reflection = refraction;
+        reflection.kind = ClosureKind::reflection;
+        reflection.fresnel = FresnelKind::dielectric;
+        m.closures.push_back(reflection);
+    }
+    return m;
+}
+
+std::vector<Photon> pane_photons(float ior, bool reflects, float light_height) {
+    Scene scene;
+    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(1.0f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t pane = scene.add_material(rough_pane(ior, reflects));
+    test::add_quad(scene, "floor", {-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}, white);
+    test::add_quad(scene, "pane", {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, pane);
+    Light light;
+    light.name = "lamp";
+    light.position = {0.0f, 0.0f, light_height};
+    light.value = glm::vec3(10.0f);
+    scene.add_light(light);
+    RenderControl control;
+    Stats stats;
+    PhotonSettings settings;
+    settings.count = 20000;
+    settings.seed = 3;
+    return trace_photons(scene, settings, control, stats).photons;
+}
+
+TEST(GlassPhotons, APhotonThatRefractsTakesOneOverEtaSquared) {
+    // Light above the pane: every photon stored on the floor came down through it (direct hits are not stored, the
+    // floor's bounces leave upwards). Refraction only and white: roulette keeps each power as emitted, times the
+    // units. Between two IORs the floor's photons differ by the ratio of the IORs squared.
+    float power[2] = {0.0f, 0.0f};
+    const float iors[2] = {1.5f, 2.0f};
+    for (int i = 0; i < 2; ++i) {
+        const std::vector<Photon> photons = pane_photons(iors[i], false, 2.0f);
+        ASSERT_GT(photons.size(), 1000u);
+        power[i] = photons.front().power.x;
+        for (const Photon& p : photons) {
+            EXPECT_LT(std::fabs(p.position.z), 1e-4f) << "stored on the floor only";
+            EXPECT_NEAR(p.power.x, power[i], 1e-5f * power[i]);
+        }
+    }
+    EXPECT_NEAR(power[1] / power[0], (1.5 * 1.5) / (2.0 * 2.0), 1e-5);
+}
+
+TEST(GlassPhotons, AThinPanesBackFaceKeepsWhatNeverCrossedIt) {
+    // Light between the floor and the pane: photons reach the pane's back face from the floor, in air all the way.
+    // Cycles treats that side as inside the glass, but no refraction happened: they keep the emitted power, as
+    // those the pane reflects onto the floor do (differential seed 152: a light reflected in a rough glass wall
+    // seen from behind was 1/ior² of Cycles).
+    // The pane's reflection and refraction are chosen by a sampling weight, not by f: roulette keeps powers near
+    // the emitted one (4π · 10 W), not exactly at it.
+    const std::vector<Photon> photons = pane_photons(2.0f, true, 0.5f);
+    const double emitted = 4.0 * kPi * 10.0;
+    size_t on_pane = 0, inside = 0;
+    double pane_sum = 0.0, floor_sum = 0.0;
+    ASSERT_GT(photons.size(), 1000u);
+    for (const Photon& p : photons) {
+        const bool pane = std::fabs(p.position.z - 1.0f) < 1e-4f;
+        on_pane += pane ? 1 : 0;
+        inside += (p.flags & kInsidePhoton) ? 1 : 0;
+        (pane ? pane_sum : floor_sum) += p.power.x;
+        // A photon that crossed the pane upwards escapes; every stored one crossed nothing.
+        EXPECT_GT(p.power.x, 0.6 * emitted) << (pane ? "on the pane" : "on the floor");
+        EXPECT_LT(p.power.x, 1.6 * emitted) << (pane ? "on the pane" : "on the floor");
+    }
+    ASSERT_GT(on_pane, 100u);
+    ASSERT_GT(photons.size() - on_pane, 100u);
+    EXPECT_EQ(inside, on_pane) << "the pane's photons are on its back face";
+    EXPECT_NEAR(pane_sum / double(on_pane) / (floor_sum / double(photons.size() - on_pane)), 1.0, 0.1);
+}
+
 // --- the pipeline --------------------------------------------------------------------------------------------
 
 // The Cornell box with a rough glossy floor, a tinted glossy back wall, a glossy ball and a glass ball.

@@ -85,6 +85,14 @@ float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi);
 // The same over one set of non-delta parts only.
 BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2);
 
+// What a photon's power is multiplied by across the scatter `s` drew from `b`, so that photon estimates come out
+// in Cycles' units of radiance. Physical radiance changes by eta² = (n_t / n_i)² across a refraction; Cycles'
+// paths carry it across as (1 − F) times itself, in and out alike, so the radiance a camera path finds beyond a
+// refraction is the physical one over eta². A photon that refracts takes 1/eta² (a closed glass object's inside
+// photons 1/ior², those that leave it 1 again, a thin glass pane's back face 1 for what never crossed it). A
+// transmitted direction shared by rough refraction and translucency takes the refraction's share of f only.
+float photon_units_across(const Bsdf& b, const BsdfSample& s);
+
 // The delta directions at this surface (the refraction's only when it exists: none under total internal
 // reflection, where its weight has gone to the mirror by Fresnel already).
 glm::vec3 mirror_direction(const Bsdf& b);

@@ -87,7 +87,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 if (step.kind != ScatterKind::transparent) direct = false;  // L T D is the path tracer's (shadows)
                 const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
-                power *= step.weight / keep;
+                power *= step.weight * (photon_units_across(b, step) / keep);  // Cycles' units beyond glass
                 const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
                 ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             }
