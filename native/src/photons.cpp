@@ -153,7 +153,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
         }
         if (step.kind != ScatterKind::transparent) direct = false;
-        // Russian roulette on the weight keeps every surviving photon's power near the emitted one.
+        // Russian roulette on the weight keeps every surviving photon's power near the emitted one (times the
+        // units of the refractions it made: 1/ior² inside glass).
         const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
         power *= step.weight * (photon_units_across(b, step) / keep);
