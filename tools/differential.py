@@ -279,6 +279,11 @@ def blender_main(argv):
             key_data["canonical"] = True
         return scene, record, key_data, moved
 
+    def photonsplat_frame(scene):
+        """The scene exported once for Photon Splat and the reference."""
+        scene.render.engine = 'PHOTONSPLAT'
+        return export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+
     seeds = parse_seeds(args.seeds)
     if args.newer_cycles_worker:
         # Only Cycles, in a newer Blender (a bpy module), beside the results of the main run.
@@ -304,9 +309,7 @@ def blender_main(argv):
                 continue
             result, images = json.loads(result_path.read_text()), dict(np.load(images_path))
             bpy.ops.wm.open_mainfile(filepath=str(out / "scenes" / f"random_{seed}.blend"))
-            bpy.context.scene.render.engine = 'PHOTONSPLAT'
-            frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
-            ref, ref_samples, ref_noise, ref_seconds = reference_pair(frame)
+            ref, ref_samples, ref_noise, ref_seconds = reference_pair(photonsplat_frame(bpy.context.scene))
             result["reference"] = reference_result(ref, ref_samples, ref_noise, ref_seconds, images["cycles"],
                                                    images["cycles_spread"])
             result["flags"] = flags_of(result)
@@ -335,8 +338,7 @@ def blender_main(argv):
               f"{'cached' if cached else f'{cyc_seconds + off_seconds:.1f} s'})", flush=True)
         if args.cycles_only:
             continue
-        scene.render.engine = 'PHOTONSPLAT'
-        frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())  # one export for both renders
+        frame = photonsplat_frame(scene)
         snapshots, warnings, ps_seconds = photonsplat_progressive(frame)
         ref, ref_samples, ref_noise, ref_seconds = reference_pair(frame)
 
@@ -477,6 +479,9 @@ CAUSES = {
 }
 
 
+CYCLES_34_CAUSES = {"multiscatter GGX near 0.02"}
+
+
 # What the runs found and what was done about it (kept here so that the report says it each time it is written).
 FINDINGS = """## What was found, and done
 
@@ -547,9 +552,6 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
   one-pixel firefly (a block 4× at 16 s, the image 1.07). That light (sun → glass → translucent surface → eye) is
   the camera path's alone, unbiased but noisy: photons would carry it better.
 """
-
-
-CYCLES_34_CAUSES = {"multiscatter GGX near 0.02"}
 
 
 def causes_of(result):
