@@ -229,6 +229,14 @@ glm::vec3 soft_light_origin(const Light& light, const glm::vec3& direction, bool
     return light.position + light.radius * (r * across + std::sqrt(std::max(0.0f, 1.0f - r * r)) * direction);
 }
 
+// Marks a soft point or spot light's photon as leaving Cycles' disc facing the receiver (first_hit_falloff).
+void mark_facing_disc(const Light& light, EmissionSample& out) {
+    if (light.radius > 0.0f && !light.sphere) {
+        out.disc_centre = light.position;
+        out.disc_radius = light.radius;
+    }
+}
+
 // A spot's photons leave in directions drawn in proportion to its hard-edged cone's profile P(μ), μ = cos θ from
 // the axis: P = μ with Cycles 3.4's cos θ factor, P = 1 without (Cycles 4.x). The smoothstep edge then scales
 // their power, whose mean stays the light's flux.
@@ -398,6 +406,7 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
                 out.origin = light.position;
                 out.direction = sample_uniform_sphere(u1, u2);
             }
+            mark_facing_disc(light, out);
             break;
         }
         case LightKind::sun: {
@@ -423,6 +432,7 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
             out.power = spot_photon_power(light, c, mu);
             out.origin = light.radius > 0.0f ? soft_light_origin(light, out.direction, light.sphere, u3, u4)
                                              : light.position;
+            mark_facing_disc(light, out);
             break;
         }
         case LightKind::area: {
@@ -432,6 +442,13 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
         }
     }
     return out;
+}
+
+float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x) {
+    if (!(emitted.disc_radius > 0.0f)) return 1.0f;
+    const glm::vec3 to_x = x - emitted.disc_centre;
+    const float d2 = glm::dot(to_x, to_x), r2 = emitted.disc_radius * emitted.disc_radius;
+    return d2 / (d2 + r2);
 }
 
 bool light_can_aim(const Light& light) {
@@ -471,6 +488,7 @@ EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const
             out.power = light_flux(light, 0.0f);
             // A soft point light emits photons from a sphere whether it is lit as a sphere or as Cycles 3.4's disc.
             if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, true, u3, u4);
+            mark_facing_disc(light, out);
             break;
         }
         case LightKind::spot: {
@@ -479,6 +497,7 @@ EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const
             if (!(mu >= c)) break;
             out.power = spot_photon_power(light, c, mu);
             if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, light.sphere, u3, u4);
+            mark_facing_disc(light, out);
             break;
         }
         case LightKind::area:

@@ -104,6 +104,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         Hit hit;
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
+        if (vertex == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
         if (m.lambert_only) {

@@ -2,7 +2,8 @@
 // without Cycles 3.4's cos θ factor (Light::spot_cosine = false), and point and spot lights that are true
 // spheres (Light::sphere, Cycles 4.x with Soft Falloff off) instead of discs facing the receiver. Each against
 // closed forms: the falloff, the cone's flux, the irradiance of a uniformly bright sphere, and photons that carry
-// the flux with the profile's direction density and light a patch as the shadow rays do.
+// the flux with the profile's direction density and light a patch as the shadow rays do. Also the photons of
+// Cycles 3.4's disc (first_hit_falloff), which this file's helpers measure as well.
 #include <cmath>
 #include <vector>
 
@@ -354,6 +355,54 @@ TEST(Cycles4Lights, SpherePhotonsLightANearPatchAsShadowRaysDo) {
         std::printf("%s sphere, patch at h = 2R: photons %.4f, shadow rays %.4f of analytic %.4f\n",
                     to_string(light.kind), photons / expected, shadow / points / expected, expected);
     }
+}
+
+TEST(Cycles4Lights, DiscLightPhotonsLightPatchesAsShadowRaysDo) {
+    // Cycles 3.4's soft point and spot lights (and 4.x's with Soft Falloff on) are the disc of their radius facing
+    // each receiver: I/(d² + R²) on the axis, not I/d². Photons leave as from the sphere and take d²/(d² + R²) at
+    // their first hit (first_hit_falloff); on patches under the light and off to its side they must give what the
+    // shadow rays give. Without that factor they were 20 % too bright under this light (R = 0.5 at d = 1), 10 % off to its side.
+    Light spot = spot_light(2.4f, 0.0f, true);  // every ray to the patches is inside its cone
+    spot.radius = 0.5f;
+    for (const Light& light : {sphere_point_light(0.5f, false), spot}) {
+        const float rho = 0.2f;
+        for (const glm::vec3 centre : {glm::vec3(0.0f, 0.0f, -1.0f), glm::vec3(1.2f, 0.0f, -1.0f)}) {
+            double power = 0.0, unweighted = 0.0;
+            const int n = 2000000;
+            Rng rng(13, RngDomain::photon, 0);
+            for (int i = 0; i < n; ++i) {
+                const EmissionSample e = sample_light_emission(light, glm::vec3(0.0f), 1.0f, rng.uniform(),
+                                                               rng.uniform(), rng.uniform(), rng.uniform());
+                ASSERT_EQ(e.disc_radius, light.radius);
+                if (!(e.direction.z < 0.0f)) continue;
+                const float t = (centre.z - e.origin.z) / e.direction.z;
+                const glm::vec3 p = e.origin + t * e.direction;
+                if (glm::dot(p - centre, p - centre) >= rho * rho) continue;
+                power += e.power.x * first_hit_falloff(e, p);
+                unweighted += e.power.x;
+            }
+            const double photons = power / n / (kPi * rho * rho);
+            double shadow = 0.0;
+            int points = 0;
+            for (int i = 0; i < 16; ++i)
+                for (int j = 0; j < 16; ++j) {
+                    const float x = rho * ((i + 0.5f) / 8.0f - 1.0f), y = rho * ((j + 0.5f) / 8.0f - 1.0f);
+                    if (x * x + y * y >= rho * rho) continue;
+                    shadow += irradiance(light, centre + glm::vec3(x, y, 0.0f), {0, 0, 1}, 256, 1 + i * 16 + j);
+                    ++points;
+                }
+            shadow /= points;
+            EXPECT_NEAR(photons / shadow, 1.0, 0.025) << to_string(light.kind) << " at x = " << centre.x;
+            EXPECT_GT(unweighted / n / (kPi * rho * rho) / shadow, 1.05) << "the factor matters here";
+            std::printf("%s disc R = 0.5, patch at (%.1f, 0, -1): photons %.4f of shadow rays %.4f\n",
+                        to_string(light.kind), centre.x, photons / shadow, shadow);
+        }
+    }
+    // A sphere light keeps every photon's power: it gives the point law (SphereLightIrradianceIsThePointLawNearAndFar).
+    Rng rng(3, RngDomain::photon, 0);
+    const EmissionSample e = sample_light_emission(sphere_point_light(0.5f, true), glm::vec3(0.0f), 1.0f,
+                                                   rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
+    EXPECT_EQ(first_hit_falloff(e, glm::vec3(0.0f, 0.0f, -1.0f)), 1.0f);
 }
 
 TEST(Cycles4Lights, SphereSpotPhotonsAimedAlongADirectionMatchTheirEmission) {

@@ -51,6 +51,8 @@ struct Material {
     bool has_lobes = false;        // a non-delta closure: the surface holds view samples and stores photons
     bool directional = false;      // a non-delta closure other than Lambert diffuse: the BRDF depends on directions
     bool transmits = false;        // a closure sends light to the other side
+    bool reflects = false;         // a non-delta closure scatters light back to the side it came from: photons
+                                   // arriving on that side are stored here
     bool transparent = false;      // a transparent closure: shadow rays pass through, attenuated
     bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
     bool textured = false;         // a closure reads a texture: hits need their UV

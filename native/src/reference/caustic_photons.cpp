@@ -73,6 +73,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 Hit hit;
                 if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
                 const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
+                if (bounce == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
                 // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).
