@@ -150,9 +150,10 @@ def test_point_light_in_a_mirror_is_an_image_source():
 def test_photons_and_path_tracing_agree_on_a_caustic_both_can_sample():
     """The partition: a point light WITH a radius seen in the mirror is path-traceable (BSDF rays hit it) and
     photon-mappable; with photons on, the path tracer must leave it to them. Both images must agree (were the
-    caustic counted twice or not at all, they would differ by ~10 %). The two model the lamp slightly
-    differently: photons leave a sphere of radius R, shadow and BSDF rays see Cycles' disc facing them; the
-    mirrored part differs by ~R^2/d^2 = 0.5 %, well inside the tolerance. Seeds 2..5 measured 0.997..1.004."""
+    caustic counted twice or not at all, they would differ by ~10 %). Photons leave a sphere of radius R and take
+    d^2/(d^2 + R^2) at their first hit, the irradiance of Cycles' disc facing the receiver that shadow and BSDF
+    rays see (without that factor the mirrored part differed by ~R^2/d^2 = 0.5 %). Seeds 2..5 measured
+    0.997..1.004 before that factor."""
     scene = mirror_scene((0.0, 0.0, 1.0), 10.0, 0.5, light_radius=0.15)
     camera, _, _ = top_down_camera(0.9, 16)
     traced, _ = ps.render_reference(scene, camera, samples=4096, max_bounces=2, caustic_photons=0, seed=2)
