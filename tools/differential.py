@@ -508,6 +508,26 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   samples the clearcoat with GGX visible normals but reports the GTR1 density, so its estimate of a small light's
   highlight is brighter than GTR1's; the engine and the reference sampled GTR1 exactly and both showed 0.71 of
   Cycles' highlight block on seed 9. The clearcoat is now sampled as Cycles samples it (docs/closures.md): 0.95.
+- **A surface that both transmits and reflects was estimated as if it were not there** (kernel bias near
+  geometry). The boundary correction divides a kernel estimate by the part of the kernel's ball that holds
+  photon-receiving surface, found by probe rays that pass through glass and translucency (the photons they pass on
+  land behind them). A surface mixing translucency with diffuse reflection was passed through as well, though
+  photons land on it and it holds view samples: its own samples found nothing and took the floor of the coverage.
+  Probes now stop at any surface with a non-delta reflecting closure (`Material::reflects`). Seed 150 (a closed
+  cylinder of translucent mixed with diffuse): the cylinder 2–2.6× Cycles → 1.0, the image 1.201 → 1.044.
+- **Soft point and spot lights sent too much light into the room** (a light's shape). Cycles 3.4 (and 4.x with
+  Soft Falloff on) lights a receiver from the disc of the light's radius R turned towards it, which gives
+  I/(d² + R²) where a point gives I/d²; direct light sampled that disc, but the photons left as from a point or a
+  sphere. A photon's power now takes d²/(d² + R²) at its first hit (`first_hit_falloff`, exact wherever the disc
+  is above the receiver's horizon), in the engine and in the reference's caustic photons. Seed 150's room under two
+  soft point lights (R = 0.15 and 0.21): 1.053 of the reference with Lambert walls → 1.000; the scene 1.044 → 0.998.
+  99 of the 200 scenes hold such a light.
+- **Aimed caustic photons stopped where an ordinary photon's caustic chain goes on** (light transport, the balance
+  heuristic). Photons aimed at mirrors and glass keep only caustic photons, and the ordinary photons' caustic
+  photons are weighed against them. An aimed photon returned after storing its first caustic photon, so where a
+  sharp surface also has a lobe (Principled glass with a clearcoat: its inside stores photons), nothing aimed went
+  on through it, and the caustic behind it kept only the ordinary photons' share. Seed 138 (a floor's caustic behind
+  a clearcoated glass cylinder): its blocks 0.71 of Cycles, the image 0.902 → 1.015.
 - **The Caustics pass now holds what Cycles' Caustics toggles remove**: light that met a glossy, mirror or
   refracting part and then a diffuse one (`kGlossyPath`), not only light → delta+ → diffuse. The caustic energy
   ratio compares exactly that with Cycles' on − off.
@@ -538,10 +558,12 @@ Where Cycles is not a usable oracle at these samples:
 
 Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
-- **A closed object whose material mixes translucency and diffuse reflection is too bright** (seed 150: its
-  cylinder 2–2.6× Cycles, the image 1.20; either closure alone renders right, 1.04). Only such a mix makes view
-  samples and photons on an object's inside walls that the camera reaches (a surface that both transmits and
-  reflects), which makes them the first suspect. The rest of that room (a window, the sky) is 4–5 % bright.
+- **The Caustics pass leaves out what camera paths find after translucency** (seed 175: its caustic energy ratio
+  0.10, the image within 3.5 %). Cycles' toggles drop every glossy and refracting closure after a diffuse-labelled
+  bounce, and a translucent one is diffuse: everything a camera path finds through a translucent cylinder on a
+  glossy floor or through glass is in Cycles' excess. Photon Splat's camera paths go on through translucency to
+  view samples beyond it, whose light is in the image but not in the pass (which holds `kGlossyPath` photons
+  only). The pass would need those samples' glossy parts split from their diffuse ones.
 - **The Caustics pass holds more than Cycles' toggles remove in rooms with Principled walls** (about 1.4× on
   seeds 9, 44, 108 and 182, their images within 1.5 %). Cycles labels a bounce by the closure it picked (by
   sample weight, a Fresnel closure's times its Fresnel colour) and drops a glossy closure right after a diffuse
