@@ -163,7 +163,17 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
     if (film.has(FilmOutput::emission)) film[FilmOutput::emission] = std::move(emission);
     if (film.has(FilmOutput::direct)) film[FilmOutput::direct] = std::move(direct_image);
     if (film.has(FilmOutput::indirect)) film[FilmOutput::indirect] = std::move(indirect_image);
-    if (caustics && film.has(FilmOutput::caustics)) film[FilmOutput::caustics] = pixel_sums(samples, *caustics, pixels);
+    if (caustics && film.has(FilmOutput::caustics)) {
+        // The caustic photons' light, or all of a kCausticSample's (view_samples.h), and what camera paths found
+        // beyond translucency and a glossy part.
+        std::vector<glm::vec3> caustic(*caustics);
+        for (size_t i = 0; i < caustic.size(); ++i)
+            if (samples.samples[i].flags & kCausticSample) caustic[i] = direct[i] + indirect[i];
+        std::vector<float> image = pixel_sums(samples, caustic, pixels);
+        for (size_t p = 0; p < samples.caustic_emission.size(); ++p)
+            for (int c = 0; c < 3; ++c) image[3 * p + c] += samples.caustic_emission[p][c];
+        film[FilmOutput::caustics] = std::move(image);
+    }
     // The film, and the images combined was summed from that it does not keep.
     stats.bytes["image"] =
         double(film.bytes() + (emission.size() + direct_image.size() + indirect_image.size()) * sizeof(float));

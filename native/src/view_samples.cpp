@@ -25,7 +25,8 @@ namespace ps {
 
 size_t ViewSamples::bytes() const {
     return samples.capacity() * sizeof(ViewSample) + lobes.capacity() * sizeof(Lobe) +
-           transmitted_direct.capacity() * sizeof(glm::vec3) + emission.capacity() * sizeof(glm::vec3) +
+           transmitted_direct.capacity() * sizeof(glm::vec3) + caustic_emission.capacity() * sizeof(glm::vec3) +
+           emission.capacity() * sizeof(glm::vec3) +
            alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
            first_depth.capacity() * sizeof(float);
 }
@@ -43,6 +44,10 @@ struct CameraPath {
     bool split_done = false;   // the pixel's one split (at the first surface with several parts) is behind
     // The ray left a rough transmission, whose own next-event estimation found the emitters this ray may meet.
     bool after_lobe = false;
+    // For the Caustics output, as Cycles labels a path's scatters (kCausticSample): the last scatter was a
+    // diffuse-labelled one (translucency), and a glossy, mirror or refracting part followed one.
+    bool diffuse_last = false;
+    bool caustic = false;
 };
 
 // What the first surface a pixel's camera ray hits tells its pixel (as Cycles' passes).
@@ -65,6 +70,7 @@ struct PixelPaths {
     std::vector<Lobe>& found_lobes;
     glm::vec3& emitted;
     glm::vec3* transmitted_direct;  // null when the scene has no rough transmission
+    glm::vec3* caustic_emitted;     // ViewSamples::caustic_emission's; null where transmitted_direct is
     FirstHit& first;
     std::vector<CameraPath> pending;  // branches started at the split, traced after the current path
     uint32_t next_branch = 1;
@@ -78,6 +84,19 @@ struct PixelPaths {
 // BSDF-sampled probes and light samples cover them, weighted against each other (direct_light.h): 0 here. Met
 // after a delta bounce (or by a camera ray), nothing else finds them: 1.
 float emitter_weight(const CameraPath& path) { return path.after_lobe ? 0.0f : 1.0f; }
+
+// Light a camera path found along the way (emission, background, a light): the pixel's, and the Caustics
+// output's too where the path is a caustic one.
+void add_emitted(PixelPaths& p, const CameraPath& path, const glm::vec3& light) {
+    p.emitted += light;
+    if (path.caustic && p.caustic_emitted != nullptr) *p.caustic_emitted += light;
+}
+
+// What Cycles labels a diffuse part (Lambert, Oren–Nayar, Principled diffuse, sheen, velvet).
+bool is_diffuse_part(const Lobe& lobe) {
+    return lobe.kind == ClosureKind::diffuse || lobe.kind == ClosureKind::principled_diffuse ||
+           lobe.kind == ClosureKind::sheen || lobe.kind == ClosureKind::velvet;
+}
 
 // The view sample of b's reflection parts at surface s, reached by `path` (b null: a lambert_only surface of
 // albedo `lambert`, seen along `wo`).
@@ -96,12 +115,15 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     sample.depth = p.first.depth;
     sample.lobe_begin = static_cast<uint32_t>(p.found_lobes.size());
     sample.lobe_count = 0;
+    bool diffuse_part = lambert != glm::vec3(0.0f);
     for (int k = 0; b != nullptr && k < b->lobe_count; ++k) {
         if (is_transmission(b->lobes[k])) continue;
         p.found_lobes.push_back(b->lobes[k]);
         ++sample.lobe_count;
+        diffuse_part = diffuse_part || is_diffuse_part(b->lobes[k]);
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
+    if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
     p.found.push_back(sample);
 }
@@ -140,15 +162,16 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 if (light == nullptr || p.sources->is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
-                p.emitted += path.throughput * h.radiance;
+                add_emitted(p, path, path.throughput * h.radiance);
             }
         }
         if (!found) {
             // After a rough transmission the world was that vertex's next-event estimation's, by its BSDF probes
             // alone (direct_light.h): not again here.
             if (!path.after_lobe)
-                p.emitted += path.throughput *
-                             world_radiance(scene, ray.direction, path.camera_ray ? ShaderRay::camera : ShaderRay::reflected);
+                add_emitted(p, path,
+                            path.throughput * world_radiance(scene, ray.direction,
+                                                             path.camera_ray ? ShaderRay::camera : ShaderRay::reflected));
             return;
         }
         const SurfacePoint s = surface_at(scene, ray, hit, from_camera ? ShaderRay::camera : ShaderRay::reflected);
@@ -159,7 +182,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
         if (s.material->emission != glm::vec3(0.0f) || s.material->program_emission)
-            p.emitted += path.throughput * emission_at(scene, s, -ray.direction) * emitter_weight(path);
+            add_emitted(p, path, path.throughput * emission_at(scene, s, -ray.direction) * emitter_weight(path));
         if (s.material->lambert_only) {  // most surfaces: one part, the view sample, without a Bsdf to build
             add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s, -ray.direction), -ray.direction, path.throughput);
             return;
@@ -207,9 +230,10 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         // Paths that go on from this vertex, the first of which continues this loop.
         CameraPath next[4];
         int next_count = 0;
-        // `same_ray`: transparency, which lets the ray go on as it was (its MIS state and camera-ness kept).
+        // `same_ray`: transparency, which lets the ray go on as it was (its MIS state, camera-ness and labels
+        // kept). `diffuse`: the scatter is one Cycles labels diffuse (translucency).
         const auto go_on = [&](const glm::vec3& direction, const glm::vec3& w, bool transmitted, bool lobe,
-                               bool same_ray = false) {
+                               bool same_ray = false, bool diffuse = false) {
             const glm::vec3 t = path.throughput * w;
             if (!(t.x > 0.0f || t.y > 0.0f || t.z > 0.0f) || !can_continue) return;
             const glm::vec3 side = transmitted ? -s.geometric_normal : s.geometric_normal;
@@ -220,6 +244,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (!same_ray) {
                 n.camera_ray = false;
                 n.after_lobe = lobe;
+                n.caustic = path.caustic || (path.diffuse_last && !diffuse);
+                n.diffuse_last = diffuse;
             }
             next[next_count++] = n;
         };
@@ -234,13 +260,21 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (take[1]) {
             // Rough transmission: its own next-event estimation here, then a sampled direction on.
             const glm::vec3 t = path.throughput / probability[1];
-            if (p.direct != nullptr && p.transmitted_direct != nullptr)
-                *p.transmitted_direct +=
+            if (p.direct != nullptr && p.transmitted_direct != nullptr) {
+                const glm::vec3 light =
                     t * direct_light_at(*p.direct, b, s.position, s.rounding_scale, LobeSet::transmission, p.rng, p.rays);
+                *p.transmitted_direct += light;
+                // Its own light is a caustic one on a caustic path, or where right after translucency this surface
+                // transmits through rough refraction alone (Cycles drops that closure there).
+                bool translucent = false;
+                for (int k = 0; k < b.lobe_count; ++k) translucent = translucent || b.lobes[k].kind == ClosureKind::translucent;
+                if ((path.caustic || (path.diffuse_last && !translucent)) && p.caustic_emitted != nullptr)
+                    *p.caustic_emitted += light;
+            }
             const float u0 = p.rng.uniform(), u1 = p.rng.uniform(), u2 = p.rng.uniform();
             const BsdfSample bs = bsdf_sample_set(b, LobeSet::transmission, u0, u1, u2);
             if (bs.kind == ScatterKind::lobes)
-                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true);
+                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true, false, !bs.glossy);
         }
         if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false);
         if (next_count == 0) return;
@@ -285,6 +319,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     if (bounces) sources.emplace(scene);
     if (rough_transmission) {
         out.transmitted_direct.assign(pixels, glm::vec3(0.0f));
+        out.caustic_emission.assign(pixels, glm::vec3(0.0f));
         direct.emplace(DirectLightContext{scene, *sources, settings.samples_per_light, scene_has_transparency(scene)});
     }
     const LightSources* sources_ptr = sources ? &*sources : nullptr;
@@ -343,6 +378,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                         PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel),
                                          rng, found, found_lobes, out.emission[pixel],
                                          out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel],
+                                         out.caustic_emission.empty() ? nullptr : &out.caustic_emission[pixel],
                                          first, {}, 1, 0, &first_hits[k], first_found[k]};
                         trace_camera_path(paths, start);
                         while (!paths.pending.empty()) {

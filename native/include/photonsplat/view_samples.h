@@ -22,6 +22,11 @@ enum ViewSampleFlags : uint32_t {
     kViaSpecular = 1u,  // the camera path bounced off a mirror, through glass or a rough transmission before it
     kGlossy = 2u,       // the surface has lobes beyond Lambert's (shading.h): its BRDF depends on the directions
     kInsideSample = 8u, // on the back face of a transmitting surface (inside glass): receives kInsidePhoton photons only
+    // Everything the sample gathers is what Cycles' Caustics toggles remove, which drop a glossy, mirror or
+    // refracting closure met right after a diffuse-labelled scatter (a translucent one, on camera paths): the path
+    // met such a part after translucency, or the sample's own surface, reached right after translucency, has no
+    // diffuse part. The Caustics output holds its direct and indirect light whole.
+    kCausticSample = 4u,
 };
 
 // Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
@@ -56,6 +61,10 @@ struct ViewSamples {
     // width × height, only where the scene has rough transmission or translucency (else empty): light that reached
     // camera paths through such a surface from the lights directly (its own next-event estimation).
     std::vector<glm::vec3> transmitted_direct;
+    // width × height, only where transmitted_direct is: the part of emission, background, lights and
+    // transmitted_direct that camera paths found beyond translucency and a glossy, mirror or refracting part
+    // (kCausticSample's rule). Already in those; the Caustics output holds it too.
+    std::vector<glm::vec3> caustic_emission;
     std::vector<glm::vec3> emission;    // width × height: emission and background seen along camera paths
     std::vector<float> alpha;           // width × height: 1 where a camera ray hit geometry, else 0
     // Of the FIRST surface each camera ray hits (glass and mirrors included), as Cycles' Normal and Depth passes:
