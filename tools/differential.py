@@ -528,6 +528,15 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   sharp surface also has a lobe (Principled glass with a clearcoat: its inside stores photons), nothing aimed went
   on through it, and the caustic behind it kept only the ordinary photons' share. Seed 138 (a floor's caustic behind
   a clearcoated glass cylinder): its blocks 0.71 of Cycles, the image 0.902 → 1.015.
+- **The Caustics pass left out what camera paths find beyond translucency** (a definition). Cycles' toggles drop
+  a glossy, mirror or refracting closure right after a diffuse-labelled scatter, and a translucent one is diffuse:
+  what a camera path finds through a translucent cylinder on a glossy floor or through glass is in Cycles' excess.
+  Photon Splat's camera paths go on through translucency to view samples beyond it, whose light was in the image
+  but not in the pass. A sample reached right after translucency whose surface has no diffuse part, and anything
+  found after translucency and a glossy, mirror or refracting part, now go to the pass whole (`kCausticSample`,
+  `ViewSamples::caustic_emission`); a sample with diffuse parts there keeps its photons' rule (an approximation).
+  Seed 175 (a translucent cylinder before a glossy floor and glass): caustic energy ratio 0.10 → 1.00; 157 0.72 →
+  1.07, 115 0.77 → 0.91 (at 60 iterations; the image is unchanged).
 - **The Caustics pass now holds what Cycles' Caustics toggles remove**: light that met a glossy, mirror or
   refracting part and then a diffuse one (`kGlossyPath`), not only light → delta+ → diffuse. The caustic energy
   ratio compares exactly that with Cycles' on − off.
@@ -558,12 +567,6 @@ Where Cycles is not a usable oracle at these samples:
 
 Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
-- **The Caustics pass leaves out what camera paths find after translucency** (seed 175: its caustic energy ratio
-  0.10, the image within 3.5 %). Cycles' toggles drop every glossy and refracting closure after a diffuse-labelled
-  bounce, and a translucent one is diffuse: everything a camera path finds through a translucent cylinder on a
-  glossy floor or through glass is in Cycles' excess. Photon Splat's camera paths go on through translucency to
-  view samples beyond it, whose light is in the image but not in the pass (which holds `kGlossyPath` photons
-  only). The pass would need those samples' glossy parts split from their diffuse ones.
 - **The Caustics pass holds more than Cycles' toggles remove in rooms with Principled walls** (about 1.4× on
   seeds 9, 44, 108 and 182, their images within 1.5 %). Cycles labels a bounce by the closure it picked (by
   sample weight, a Fresnel closure's times its Fresnel colour) and drops a glossy closure right after a diffuse
