@@ -579,6 +579,15 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 """
 
 
+def paired_reference_sentence(results):
+    paired = sum('noise' in r["reference"] for r in results)
+    sentence = "The reference is a pair of seeds rendered until they agree (its noise given beside it)"
+    if paired == len(results):
+        return sentence + " for every scene."
+    return (sentence + f" for {paired} of the scenes; the others' is one seed of 256 samples, from a run before the "
+            "reference was paired.")
+
+
 def causes_of(result):
     return [name for name, (holds, _) in CAUSES.items() if holds(result)]
 
@@ -704,9 +713,7 @@ def write_report(args):
         "    /usr/bin/python3 tools/differential.py --seeds 0-199 --reference-only        # the reference again",
         "    /usr/bin/python3 tools/differential.py --report-only",
         "",
-        f"The reference is a pair of seeds rendered until they agree (its noise given beside it) for "
-        f"{sum('noise' in r['reference'] for r in results)} of the scenes; the others' is one seed of 256 samples, "
-        "from a run before the reference was paired.",
+        paired_reference_sentence(results),
         "",
         "## Acceptance (issue 18)",
         "",
