@@ -164,12 +164,15 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
     if (film.has(FilmOutput::direct)) film[FilmOutput::direct] = std::move(direct_image);
     if (film.has(FilmOutput::indirect)) film[FilmOutput::indirect] = std::move(indirect_image);
     if (caustics && film.has(FilmOutput::caustics)) {
-        // The caustic photons' light, or all of a kCausticSample's (view_samples.h), and what camera paths found
+        // The caustic photons' light, but all of a kCausticSample's (view_samples.h), and what camera paths found
         // beyond translucency and a glossy part.
-        std::vector<glm::vec3> caustic(*caustics);
-        for (size_t i = 0; i < caustic.size(); ++i)
-            if (samples.samples[i].flags & kCausticSample) caustic[i] = direct[i] + indirect[i];
-        std::vector<float> image = pixel_sums(samples, caustic, pixels);
+        std::vector<float> image = pixel_sums(samples, *caustics, pixels);
+        for (size_t i = 0; i < samples.samples.size(); ++i) {
+            const ViewSample& s = samples.samples[i];
+            if (!(s.flags & kCausticSample)) continue;
+            const glm::vec3 rest = direct[i] + indirect[i] - (*caustics)[i];
+            for (int c = 0; c < 3; ++c) image[3 * s.pixel + c] += rest[c];
+        }
         for (size_t p = 0; p < samples.caustic_emission.size(); ++p)
             for (int c = 0; c < 3; ++c) image[3 * p + c] += samples.caustic_emission[p][c];
         film[FilmOutput::caustics] = std::move(image);

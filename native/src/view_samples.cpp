@@ -70,7 +70,7 @@ struct PixelPaths {
     std::vector<Lobe>& found_lobes;
     glm::vec3& emitted;
     glm::vec3* transmitted_direct;  // null when the scene has no rough transmission
-    glm::vec3* caustic_emitted;     // ViewSamples::caustic_emission's; null where transmitted_direct is
+    glm::vec3* caustic_emitted;     // ViewSamples::caustic_emission's; null when transmitted_direct is
     FirstHit& first;
     std::vector<CameraPath> pending;  // branches started at the split, traced after the current path
     uint32_t next_branch = 1;
@@ -168,10 +168,10 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (!found) {
             // After a rough transmission the world was that vertex's next-event estimation's, by its BSDF probes
             // alone (direct_light.h): not again here.
-            if (!path.after_lobe)
-                add_emitted(p, path,
-                            path.throughput * world_radiance(scene, ray.direction,
-                                                             path.camera_ray ? ShaderRay::camera : ShaderRay::reflected));
+            if (!path.after_lobe) {
+                const ShaderRay kind = path.camera_ray ? ShaderRay::camera : ShaderRay::reflected;
+                add_emitted(p, path, path.throughput * world_radiance(scene, ray.direction, kind));
+            }
             return;
         }
         const SurfacePoint s = surface_at(scene, ray, hit, from_camera ? ShaderRay::camera : ShaderRay::reflected);
@@ -267,7 +267,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 // Its own light is a caustic one on a caustic path, or where right after translucency this surface
                 // transmits through rough refraction alone (Cycles drops that closure there).
                 bool translucent = false;
-                for (int k = 0; k < b.lobe_count; ++k) translucent = translucent || b.lobes[k].kind == ClosureKind::translucent;
+                for (int k = 0; k < b.lobe_count; ++k)
+                    translucent = translucent || b.lobes[k].kind == ClosureKind::translucent;
                 if ((path.caustic || (path.diffuse_last && !translucent)) && p.caustic_emitted != nullptr)
                     *p.caustic_emitted += light;
             }

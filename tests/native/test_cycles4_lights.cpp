@@ -361,7 +361,8 @@ TEST(Cycles4Lights, DiscLightPhotonsLightPatchesAsShadowRaysDo) {
     // Cycles 3.4's soft point and spot lights (and 4.x's with Soft Falloff on) are the disc of their radius facing
     // each receiver: I/(d² + R²) on the axis, not I/d². Photons leave as from the sphere and take d²/(d² + R²) at
     // their first hit (first_hit_falloff); on patches under the light and off to its side they must give what the
-    // shadow rays give. Without that factor they were 20 % too bright under this light (R = 0.5 at d = 1), 10 % off to its side.
+    // shadow rays give. Without that factor they were 20 % too bright under this light (R = 0.5 at d = 1), 10 %
+    // off to its side.
     Light spot = spot_light(2.4f, 0.0f, true);  // every ray to the patches is inside its cone
     spot.radius = 0.5f;
     for (const Light& light : {sphere_point_light(0.5f, false), spot}) {
