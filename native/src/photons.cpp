@@ -73,12 +73,8 @@ struct CausticWeighting {
 // Cycles labels a diffuse reflection.
 bool has_diffuse_reflection(const Bsdf& b) {
     if (b.lambert != glm::vec3(0.0f)) return true;
-    for (int k = 0; k < b.lobe_count; ++k) {
-        const ClosureKind kind = b.lobes[k].kind;
-        if (kind == ClosureKind::diffuse || kind == ClosureKind::principled_diffuse || kind == ClosureKind::sheen ||
-            kind == ClosureKind::velvet)
-            return true;
-    }
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (is_diffuse_reflection(b.lobes[k])) return true;
     return false;
 }
 

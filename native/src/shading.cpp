@@ -228,6 +228,11 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
 
 bool is_transmission(const Lobe& l) { return l.kind == ClosureKind::translucent || l.kind == ClosureKind::refraction; }
 
+bool is_diffuse_reflection(const Lobe& l) {
+    return l.kind == ClosureKind::diffuse || l.kind == ClosureKind::principled_diffuse || l.kind == ClosureKind::sheen ||
+           l.kind == ClosureKind::velvet;
+}
+
 glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set) {
     const bool above = glm::dot(wi, b.ng) > 0.0f;
     if (above && set == LobeSet::transmission) return glm::vec3(0.0f);

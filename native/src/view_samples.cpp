@@ -92,12 +92,6 @@ void add_emitted(PixelPaths& p, const CameraPath& path, const glm::vec3& light) 
     if (path.caustic && p.caustic_emitted != nullptr) *p.caustic_emitted += light;
 }
 
-// What Cycles labels a diffuse part (Lambert, Oren–Nayar, Principled diffuse, sheen, velvet).
-bool is_diffuse_part(const Lobe& lobe) {
-    return lobe.kind == ClosureKind::diffuse || lobe.kind == ClosureKind::principled_diffuse ||
-           lobe.kind == ClosureKind::sheen || lobe.kind == ClosureKind::velvet;
-}
-
 // The view sample of b's reflection parts at surface s, reached by `path` (b null: a lambert_only surface of
 // albedo `lambert`, seen along `wo`).
 void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf* b,
@@ -120,7 +114,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
         if (is_transmission(b->lobes[k])) continue;
         p.found_lobes.push_back(b->lobes[k]);
         ++sample.lobe_count;
-        diffuse_part = diffuse_part || is_diffuse_part(b->lobes[k]);
+        diffuse_part = diffuse_part || is_diffuse_reflection(b->lobes[k]);
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;

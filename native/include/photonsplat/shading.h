@@ -64,6 +64,9 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
                                const glm::vec3& wi, const glm::vec3& wo);
 bool bsdf_has(const Bsdf& b, LobeSet set);  // the set has a part with weight here
 bool is_transmission(const Lobe& lobe);
+// A part Cycles labels a diffuse reflection (Oren–Nayar, Principled diffuse, sheen, velvet), as against a microfacet
+// one: its Light Path flags and Caustics toggles go by that label.
+bool is_diffuse_reflection(const Lobe& lobe);
 
 // What a path does next at this surface.
 enum class ScatterKind : uint8_t { none, lobes, mirror, refraction, transparent };

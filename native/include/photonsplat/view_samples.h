@@ -21,12 +21,12 @@ struct Stats;
 enum ViewSampleFlags : uint32_t {
     kViaSpecular = 1u,  // the camera path bounced off a mirror, through glass or a rough transmission before it
     kGlossy = 2u,       // the surface has lobes beyond Lambert's (shading.h): its BRDF depends on the directions
-    kInsideSample = 8u, // on the back face of a transmitting surface (inside glass): receives kInsidePhoton photons only
     // Everything the sample gathers is what Cycles' Caustics toggles remove, which drop a glossy, mirror or
     // refracting closure met right after a diffuse-labelled scatter (a translucent one, on camera paths): the path
     // met such a part after translucency, or the sample's own surface, reached right after translucency, has no
     // diffuse part. The Caustics output holds its direct and indirect light whole.
     kCausticSample = 4u,
+    kInsideSample = 8u, // on the back face of a transmitting surface (inside glass): receives kInsidePhoton photons only
 };
 
 // Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
