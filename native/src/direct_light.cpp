@@ -84,6 +84,18 @@ bool scene_has_transparency(const Scene& scene) {
     return false;
 }
 
+ShadowSegment shadow_segment(const glm::vec3& x, const glm::vec3& origin, const LightIncidence& in) {
+    constexpr float kShortOfLight = 1e-4f;
+    ShadowSegment out{Ray{origin, in.wi}, in.distance * (1.0f - kShortOfLight)};
+    if (!std::isfinite(in.distance)) return out;
+    const glm::vec3 to_light = (x + in.distance * in.wi) - origin;
+    const float d = glm::length(to_light);
+    if (!(d > 0.0f) || !std::isfinite(d)) return out;
+    out.ray.direction = to_light / d;
+    out.t_max = d * (1.0f - kShortOfLight);
+    return out;
+}
+
 glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, bool transparency) {
     const RayTracer& tracer = scene.ray_tracer();
     if (!transparency) return tracer.occluded(ray, 0.0f, t_max, kShadowRays) ? glm::vec3(0.0f) : glm::vec3(1.0f);
@@ -192,10 +204,10 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                                 ? 1.0f
                                 : (probes == n ? power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set))
                                                : power_heuristic(float(n) * in.pdf, float(probes) * bsdf_pdf(b, in.wi, set)));
-            // Stop just short of the light's own point so the light's surroundings still shadow it.
-            shadow[pending] = Ray{origin, in.wi};
+            const ShadowSegment segment = shadow_segment(x, origin, in);
+            shadow[pending] = segment.ray;
             t_min[pending] = 0.0f;
-            t_max[pending] = in.distance * (1.0f - 1e-4f);
+            t_max[pending] = segment.t_max;
             value[pending] = f * in.value;
             scale[pending] = cos_shading * w;
             if (++pending == RayTracer::kPacketRays) trace_pending();

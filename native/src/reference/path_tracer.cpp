@@ -80,8 +80,9 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
         const glm::vec3 side = front ? b.ng : -b.ng;
-        const glm::vec3 t = shadow_transmittance(c.scene, Ray{offset_ray_origin(s.position, side, s.rounding_scale), in.wi},
-                                                 in.distance * (1.0f - 1e-4f), c.transparency);
+        const ShadowSegment segment =
+            shadow_segment(s.position, offset_ray_origin(s.position, side, s.rounding_scale), in);
+        const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
         const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf, bsdf_sample_pdf(b, in.wi));
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
