@@ -76,8 +76,9 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 if (bounce == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
-                // has reflection parts; it goes on only through delta parts (lobes are the path tracer's).
-                if (!direct && bsdf_has(b, LobeSet::reflection))
+                // has parts other than deltas (a path's vertex on either side gathers it: trace_reference_path);
+                // it goes on only through delta parts (lobes are the path tracer's).
+                if (!direct && bsdf_has(b, LobeSet::all))
                     per_chunk[chunk].push_back(Photon{
                         s.position, -ray.direction, s.geometric_normal, power,
                         kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u)});
@@ -144,7 +145,8 @@ int64_t CausticPhotonMap::cell_of(float v, int axis) const {
     return static_cast<int64_t>(std::clamp(c, 0.0, static_cast<double>(kMaxCellsPerAxis - 1)));
 }
 
-glm::vec3 CausticPhotonMap::radiance(const ViewSample& s, const Lobe* lobes) const {
+template <class Flux>
+glm::vec3 CausticPhotonMap::gather(const ViewSample& s, const Flux& flux) const {
     if (photons_.empty()) return glm::vec3(0.0f);
     const float r = params_.radius;
     int64_t from[3] = {0, 0, 0}, to[3] = {0, 0, 0};
@@ -162,9 +164,22 @@ glm::vec3 CausticPhotonMap::radiance(const ViewSample& s, const Lobe* lobes) con
                 if (found == cells_.end()) continue;
                 for (uint32_t i = found->second.first; i < found->second.second; ++i)
                     if (photon_reaches_sample(s, positions_[i], photons_[i], params_))
-                        sum += photon_reflected_flux(s, lobes, positions_[i], photons_[i], params_);
+                        sum += flux(photons_[i], positions_[i]);
             }
     return finish_sample(s, sum, params_);
+}
+
+glm::vec3 CausticPhotonMap::radiance(const ViewSample& s, const Lobe* lobes) const {
+    return gather(s, [&](const Photon& photon, const glm::vec3& p) {
+        return photon_reflected_flux(s, lobes, p, photon, params_);
+    });
+}
+
+glm::vec3 CausticPhotonMap::transmitted_radiance(const ViewSample& s, const Bsdf& b) const {
+    return gather(s, [&](const Photon& photon, const glm::vec3& p) {
+        const glm::dvec3 f = glm::dvec3(bsdf_eval(b, photon.wi, LobeSet::transmission)) * glm::dvec3(photon.power);
+        return params_.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params_);
+    });
 }
 
 }  // namespace ps

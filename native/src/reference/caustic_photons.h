@@ -28,6 +28,11 @@ public:
     // Radiance reflected towards s.wo by the photons around s (s.position relative to origin()), times
     // s.throughput: the per-sample test, BRDF and uniform kernel of render() (splat.h), τ = 60°.
     glm::vec3 radiance(const ViewSample& s, const Lobe* lobes) const;
+    // Radiance that the photons around a vertex arriving from the other side of its surface send through its
+    // transmission parts (b's) towards b.wo, times s.throughput: a rough glass surface lit through a mirror or
+    // glass from the side the path is not on. `s` is the vertex as seen from that other side (its normal and
+    // inside flag turned over), so that the photons stored there pass the same test.
+    glm::vec3 transmitted_radiance(const ViewSample& s, const Bsdf& b) const;
     const glm::vec3& origin() const { return origin_; }
     size_t size() const { return photons_.size(); }
 
@@ -43,6 +48,9 @@ private:
 
     uint64_t key(int64_t x, int64_t y, int64_t z) const { return (uint64_t(z) << 42) | (uint64_t(y) << 21) | uint64_t(x); }
     int64_t cell_of(float v, int axis) const;
+    // Σ flux(photon, its position) over the photons that reach s, finished as a radiance (splat.h).
+    template <class Flux>
+    glm::vec3 gather(const ViewSample& s, const Flux& flux) const;
 };
 
 // Traces `count` photon paths of pass `pass` from the point lights and suns (chosen by power), through mirrors

@@ -4,7 +4,8 @@
 // At a non-specular vertex x (diffuse, or glossy rough enough to be a lobe):
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
 //     w = p_light² / (p_light² + p_bsdf²); delta lights (p_light = 0 by convention) get w = 1;
-//   - this pass's caustic photons are gathered (the L S+ D paths of point lights and suns: never counted here);
+//   - this pass's caustic photons are gathered (the L S+ D paths of point lights and suns: never counted here),
+//     through the reflection parts from x's side and through the transmission parts from the other;
 //   - one BSDF direction is sampled; whatever light that ray meets next (an analytic light in front of the
 //     first surface, an emissive triangle, a sun's cone when it escapes) is weighted w = p_bsdf² / (p_bsdf² +
 //     p_light²). A constant world has no light sampling here, so it always gets w = 1; a programmed world
@@ -59,6 +60,19 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
         if (!is_transmission(b.lobes[k])) lobes[v.lobe_count++] = b.lobes[k];
     v.flags = (v.lobe_count > 0 ? kGlossy : 0u) |
               (inside_transmitter(s) ? static_cast<uint32_t>(kInsideSample) : 0u);
+    return v;
+}
+
+// The vertex as photons on the other side of its surface see it: for light that its transmission parts pass on.
+ViewSample far_side_vertex(const SurfacePoint& s, const Bsdf& b, const glm::vec3& origin, const glm::vec3& throughput) {
+    ViewSample v{};
+    v.position = s.position - origin;
+    v.normal = -b.ng;
+    v.shading_normal = -b.n;
+    v.rounding_scale = s.rounding_scale;
+    v.wo = b.wo;
+    v.throughput = throughput;
+    v.flags = inside_transmitter(s) ? 0u : static_cast<uint32_t>(kInsideSample);
     return v;
 }
 
@@ -158,6 +172,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 const ViewSample v = vertex_at(s, b, origin, throughput, lobes);
                 radiance += c.caustics->radiance(v, lobes);  // throughput included
             }
+            if (c.caustics && bsdf_has(b, LobeSet::transmission))
+                radiance += c.caustics->transmitted_radiance(far_side_vertex(s, b, origin, throughput), b);
         }
         if (depth >= c.max_bounces) break;
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
