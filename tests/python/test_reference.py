@@ -188,6 +188,30 @@ def test_photons_light_a_rough_refraction_seen_from_its_other_side():
     assert ratio == pytest.approx(1.0, abs=0.02)
 
 
+def test_a_light_before_a_transparent_surface_counts_once():
+    """An area light 1 above a Lambert floor and, above the light, a fully transparent sheet: the sheet must change
+    nothing. A BSDF-sampled ray from the floor that passes the light's plane and crosses the sheet goes on along
+    the same line; the light was tested again from the floor's point at every such crossing and counted twice
+    (issue 18, seed 134 of the random scenes: the reference 1.11 of Cycles there)."""
+    def render(sheet):
+        scene = ps.Scene()
+        floor = scene.add_material(name="floor", color=(0.5, 0.5, 0.5))
+        clear = scene.add_material(name="clear", kind="closures", closures=[dict(kind="transparent", color=(1, 1, 1))])
+        v, t = scenes.quad((-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0))
+        scene.add_mesh(name="floor", vertices=v, triangles=t, material_ids=np.full(2, floor, np.int32))
+        if sheet:
+            v, t = scenes.quad((-3, -3, 1.5), (3, -3, 1.5), (3, 3, 1.5), (-3, 3, 1.5))
+            scene.add_mesh(name="sheet", vertices=v, triangles=t, material_ids=np.full(2, clear, np.int32))
+        # It emits towards cross(u, v) = -z: down onto the floor.
+        scene.add_area_light(name="lamp", center=(0.0, 0.0, 1.0), axis_u=(1.0, 0.0, 0.0), axis_v=(0.0, -1.0, 0.0),
+                             radiance=(2.0, 2.0, 2.0))
+        image, _ = ps.render_reference(scene, top_down_camera(0.9, 16)[0], samples=256, max_bounces=4, seed=4)
+        return image[..., :3].mean()
+    without, with_sheet = render(False), render(True)
+    print(f"\nlight under a transparent sheet: {with_sheet / without:.4f} of the same without the sheet")
+    assert with_sheet / without == pytest.approx(1.0, abs=0.01)
+
+
 def test_deterministic_for_any_thread_count():
     scene = scenes.cornell_box()
     camera = scenes.cornell_camera(24, 24)
