@@ -1,7 +1,7 @@
 // Low-discrepancy points per view sample, continued across the iterations of a progressive render: iteration i takes
 // points i·n … i·n + n − 1. Cycles draws a pixel's samples from one such sequence, so its error falls faster than
 // 1/N where the integrand is smooth (the sky over a floor); independent random numbers per iteration do not.
-// Used for a programmed world's direct light.
+// Used for a programmed world's direct light, and for where the reference renderer's passes fall in each pixel.
 //
 // Dimensions 1 and 2 are Sobol's (0,2)-sequence (the radical inverse in base 2 and Sobol's second dimension),
 // Owen-scrambled per pixel and stream by hashing (Burley 2020, "Practical Hash-based Owen Scrambling": a
@@ -19,10 +19,10 @@ namespace ps {
 
 class SampleSequence {
 public:
-    static constexpr uint64_t kLightStream = 0, kBsdfStream = 1;
+    static constexpr uint64_t kLightStream = 0, kBsdfStream = 1, kPixelStream = 2;
 
-    // `key`: the view sample (pixel and branch); `stream`: which use of the sequence, each scrambled apart
-    // (kLightStream: light samples, kBsdfStream: BSDF samples).
+    // `key`: the view sample (pixel and branch), or the pixel; `stream`: which use of the sequence, each scrambled
+    // apart (kLightStream: light samples, kBsdfStream: BSDF samples, kPixelStream: positions in the pixel).
     SampleSequence(uint64_t seed, uint64_t key, uint64_t stream) {
         Rng rng(seed ^ (stream * 0xA24BAED4963EE407ull), RngDomain::sample_sequence, key);
         shuffle_ = rng.next_u32();

@@ -26,6 +26,7 @@
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render.h"
 #include "photonsplat/rng.h"
+#include "photonsplat/sample_sequence.h"
 #include "photonsplat/scene.h"
 
 namespace ps {
@@ -128,7 +129,13 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
                         for (int x = 0; x < width; ++x) {
                             const size_t pixel = static_cast<size_t>(y) * width + x;
                             Rng rng(settings.seed, RngDomain::reference_path, static_cast<uint64_t>(pass) * pixels + pixel);
-                            const float jx = rng.uniform(), jy = rng.uniform();  // box filter over the pixel
+                            // A box filter over the pixel, its passes placed by one low-discrepancy sequence as
+                            // Cycles places a pixel's samples: a glint covering part of a pixel (a sun in a smooth
+                            // floor) converges far sooner than with independent positions (differential seed 121:
+                            // its four pixels 0.79 of Cycles at 2 x 512 samples, 0.94 at 2 x 4096).
+                            float jx = 0.5f, jy = 0.5f, unused = 0.0f;
+                            SampleSequence(settings.seed, pixel, SampleSequence::kPixelStream)
+                                .point(static_cast<uint32_t>(pass), jx, jy, unused);
                             const glm::vec3 l = trace_reference_path(context, camera.generate_ray(x + jx, y + jy), rng, local);
                             // A non-finite sample (degenerate geometry) would poison the pixel for good: drop and count it.
                             if (std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))
