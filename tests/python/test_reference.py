@@ -148,6 +148,15 @@ def test_point_light_in_a_mirror_is_an_image_source():
     assert np.abs(blocks - 1.0).max() < 0.1
 
 
+def photons_over_path_tracing(scene, camera, traced_samples, mapped_samples):
+    """The image mean with the caustics of point lights by photons (50k per pass) over the same by path tracing
+    alone (caustic_photons=0), two bounces."""
+    traced, _ = ps.render_reference(scene, camera, samples=traced_samples, max_bounces=2, caustic_photons=0, seed=2)
+    mapped, _ = ps.render_reference(scene, camera, samples=mapped_samples, max_bounces=2, caustic_photons=50_000,
+                                    seed=2)
+    return mapped[..., :3].mean() / traced[..., :3].mean()
+
+
 def test_photons_and_path_tracing_agree_on_a_caustic_both_can_sample():
     """The partition: a point light WITH a radius seen in the mirror is path-traceable (BSDF rays hit it) and
     photon-mappable; with photons on, the path tracer must leave it to them. Both images must agree (were the
@@ -156,10 +165,7 @@ def test_photons_and_path_tracing_agree_on_a_caustic_both_can_sample():
     rays see (without that factor the mirrored part differed by ~R^2/d^2 = 0.5 %). Seeds 2..5 measured
     0.997..1.004 before that factor."""
     scene = mirror_scene((0.0, 0.0, 1.0), 10.0, 0.5, light_radius=0.15)
-    camera, _, _ = top_down_camera(0.9, 16)
-    traced, _ = ps.render_reference(scene, camera, samples=4096, max_bounces=2, caustic_photons=0, seed=2)
-    mapped, _ = ps.render_reference(scene, camera, samples=32, max_bounces=2, caustic_photons=50_000, seed=2)
-    ratio = mapped[..., :3].mean() / traced[..., :3].mean()
+    ratio = photons_over_path_tracing(scene, top_down_camera(0.9, 16)[0], traced_samples=4096, mapped_samples=32)
     print(f"\nsphere light in the mirror: photons / path tracing = {ratio:.4f}")
     assert ratio == pytest.approx(1.0, abs=0.015)
 
@@ -180,10 +186,8 @@ def test_photons_light_a_rough_refraction_seen_from_its_other_side():
     v, t = scenes.quad((-1, -1, 2), (1, -1, 2), (1, 1, 2), (-1, 1, 2))
     scene.add_mesh(name="ceiling", vertices=v, triangles=t, material_ids=np.full(2, mirror, np.int32))
     scene.add_point_light(name="lamp", position=(0.0, 0.0, 1.0), intensity=(10.0,) * 3, radius=0.15)
-    camera = top_down_camera(0.9, 16, below=True)[0]
-    traced, _ = ps.render_reference(scene, camera, samples=16384, max_bounces=2, caustic_photons=0, seed=2)
-    mapped, _ = ps.render_reference(scene, camera, samples=128, max_bounces=2, caustic_photons=50_000, seed=2)
-    ratio = mapped[..., :3].mean() / traced[..., :3].mean()
+    ratio = photons_over_path_tracing(scene, top_down_camera(0.9, 16, below=True)[0], traced_samples=16384,
+                                      mapped_samples=128)
     print(f"\nfrosted pane under a mirror, from below: photons / path tracing = {ratio:.4f}")
     assert ratio == pytest.approx(1.0, abs=0.02)
 
