@@ -609,6 +609,10 @@ Where Cycles is not a usable oracle at these samples:
   its caustic blocks rose 7–13 % from 2 × 512 to 8192 samples, and Photon Splat's error against the deeper image
   halved). The block relMSE, its slope and the caustic energy ratio are limited by that wherever a caustic lies;
   the slope is also given over the blocks without caustics.
+- **Two seeds agreeing does not make Cycles' caustics converged**: seed 143's pair agrees at 256 samples (0.31 %)
+  on a closed room whose caustics of small lights (13 % of the image) Cycles finds only by BSDF rays; at 2 × 4096
+  samples its mean is 4.0 % higher, and Photon Splat and the reference are 0.994 and 0.993 of it (1.034 and 1.033
+  of the 256-sample pair). Doubling until successive rounds agree, not only the two seeds, would catch it.
 - **Multiscatter GGX near roughness 0.02**: Cycles 3.4 shows almost none of a small light's reflection (seed 14's
   floor: 0.230 against 0.509 with GGX, where the reference gives 0.508 for both). Not matched.
 - **Multiscatter GGX glass** is rendered as single-scatter GGX by the export (noted on the material): darker where
@@ -628,12 +632,15 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
 Found, not fixed yet (both renderers):
 
-- **A clearcoat under a large soft light** (seed 153, a Principled floor of clearcoat 0.84 under a spot of radius
-  0.62): 1.01–1.02 of Cycles in Photon Splat and the reference alike; with the clearcoat at 0 it is 1.000, and a
-  Lambert floor under that spot 1.0002, so the light's model is not the cause. Cycles estimates the clearcoat with
-  GGX visible normals of α = 0.0009 but weighs it with the GTR1 density, a biased estimator whose result depends on
-  every detail of its sampling; choosing closures by their weights' mean (as Cycles) instead of their luminance
-  left it at 1.011.
+- **A clearcoat over metal** (seed 153, a Principled floor of metallic 0.22 and clearcoat 0.84 under a spot of
+  radius 0.62; rooms whose Principled walls have a clearcoat: seeds 24, 99 and 102): 1.01–1.03 of Cycles in Photon
+  Splat and the reference alike, also against Cycles at 2 × 4096 samples (seeds 24, 99, 102: Photon Splat 1.016,
+  1.025, 1.012; the reference 1.024, 1.034, 1.020). Under seed 153's spot, the reference against Cycles at 1024
+  samples: a clearcoat alone 1.0006 (where Cycles' own estimate is 1.6 times the clearcoat's light-sampled one:
+  it samples the clearcoat with GGX visible normals and weighs it with the GTR1 density, as the engine now does),
+  metal alone 1.0013, the clearcoat over dielectric specular 1.0015, over diffuse 1.0031, over metal 1.019; a
+  Lambert floor under that spot 1.0002. The biased estimator's result depends on everything its MIS weight sees:
+  choosing closures by their weights' mean (as Cycles) instead of their luminance left it unchanged.
 """
 
 
