@@ -638,8 +638,9 @@ Found, not fixed yet (both renderers):
   1.025, 1.012; the reference 1.024, 1.034, 1.020). Under seed 153's spot, the reference against Cycles at 1024
   samples: a clearcoat alone 1.0006 (where Cycles' own estimate is 1.6 times the clearcoat's light-sampled one:
   it samples the clearcoat with GGX visible normals and weighs it with the GTR1 density, as the engine now does),
-  metal alone 1.0013, the clearcoat over dielectric specular 1.0015, over diffuse 1.0031, over metal 1.019; a
-  Lambert floor under that spot 1.0002. The biased estimator's result depends on everything its MIS weight sees:
+  metal alone 1.0013, the clearcoat over dielectric specular 1.0015, over diffuse 1.0031, over metal 1.019 (and
+  0.966 with a clearcoat roughness of 0.2: the two parts together, not either alone); a Lambert floor under that
+  spot 1.0002. The biased estimator's result depends on everything its MIS weight sees:
   choosing closures by their weights' mean (as Cycles) instead of their luminance left it unchanged.
 """
 
