@@ -630,6 +630,15 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
   one-pixel firefly (a block 4× at 16 s, the image 1.07). That light (sun → glass → translucent surface → eye) is
   the camera path's alone, unbiased but noisy: photons would carry it better.
 
+- **A caustic seen through translucency or rough transmission** (a missing light path, Photon Splat's now alone).
+  Light that reaches a translucent or rough-transmitting surface through a mirror or glass and is seen from its
+  other side (sun → glass → translucent cylinder → eye) is mostly missed by the engine: its view samples gather
+  photons through their reflection parts only, and what a camera path finds by going on through translucency to
+  glass and the sun is a noisy share (seed 66's firefly). The reference gathers it now (its fix above): seed 140
+  went 0.756 → 0.947 in the reference, while Photon Splat stays 0.743 (Cycles is not converged there, its pair
+  1.57 % apart at 8192 samples). The engine needs the same gather: a view sample's far side taking the caustic
+  photons stored there through its transmission parts.
+
 Found, not fixed yet (both renderers):
 
 - **A clearcoat over metal** (seed 153, a Principled floor of metallic 0.22 and clearcoat 0.84 under a spot of
