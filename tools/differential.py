@@ -653,8 +653,8 @@ Found, not fixed yet (both renderers):
   their weights' mean (as Cycles) instead of their luminance left it unchanged. This is the lead for most of what
   is left: of the 13 scenes whose reference is more than 2 % off without a known cause, 10 hold a clearcoat (24,
   72, 89, 94, 99, 102, 118, 135, 146, 153; over metal in 72, 94, 99, 135 and 153), and the other three are noise
-  (33 and 136: the reference's fireflies, a small spot's caustic through sharp glass that it path traces; 143:
-  Cycles, above). 67 of the 200 scenes hold a clearcoat, 36 of them over metal.
+  (the reference's fireflies: 33, a small spot's caustic through sharp glass, which it path traces; 136, a sun
+  through glass and near-sharp Principled glass; and 143: Cycles, above). 67 of the 200 scenes hold a clearcoat, 36 of them over metal.
 """
 
 
