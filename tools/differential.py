@@ -466,11 +466,11 @@ CAUSES = {
     "microfacet near 0.02": (
         # Held where the newer Cycles, once rendered, agrees with Photon Splat (elsewhere the difference has another
         # cause: seeds 100 and 146 stay 1.051 and 0.954 of Cycles 4.5).
-        lambda r: any(m["kind"] == "glossy" and m.get("distribution") in ("GGX", "BECKMANN") and 0 < m["roughness"] <= 0.03
-                      for m in materials_of(r["record"]))
+        lambda r: any(m["kind"] == "glossy" and m.get("distribution") in ("GGX", "BECKMANN")
+                      and 0 < m["roughness"] <= 0.03 for m in materials_of(r["record"]))
         and (photonsplat_over_newer(r) is None or abs(photonsplat_over_newer(r) - 1) <= MEAN_TOL),
-        "Cycles 3.4 evaluates GGX and Beckmann from tan²θ = (1 − cos²θ) / cos²θ in single precision, which near the "
-        "normal moves in steps of 1.2e-7 while α² is 1.6e-7 at roughness 0.02: the distribution it weighs light "
+        "Cycles 3.4 evaluates GGX and Beckmann from tan²θ = (1 − cos²θ) / cos²θ in single precision, which near "
+        "the normal moves in steps of 1.2e-7 while α² is 1.6e-7 at roughness 0.02: the distribution it weighs light "
         "samples with is a staircase there. Cycles', not matched (the export renders roughness up to 0.05 as a "
         "mirror); Cycles 4.5 agrees with Photon Splat where 3.4 does not (seed 36, a small area light in a Beckmann "
         "0.02 floor: Photon Splat 0.952 of 3.4 and 1.002 of 4.5; seed 121, a sun in a GGX 0.02 floor: 0.987 and "
@@ -551,8 +551,8 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
 - **A light behind a transparent surface lost its share of a glossy surface's highlight** (light transport, MIS).
   Direct light weighs light samples against BSDF-sampled probe rays; shadow rays passed transparent surfaces but
   the probes stopped at them, so the BSDF's share of a light, emitter or world beyond a clear surface was lost. The
-  probes now pass transparency as shadow rays do. Test: `test_glossy.py::test_a_glossy_surface_sees_a_light_through_a_transparent_sheet`
-  (a glossy floor under an area light behind a clear sheet was 0.55 of the same without the sheet).
+  probes now pass transparency as shadow rays do. Test:
+  `test_glossy.py::test_a_glossy_surface_sees_a_light_through_a_transparent_sheet` (a glossy floor under an area light behind a clear sheet was 0.55 of the same without the sheet).
 - **The Caustics pass left out what camera paths find beyond translucency** (a definition). Cycles' toggles drop
   a glossy, mirror or refracting closure right after a diffuse-labelled scatter, and a translucent one is diffuse:
   what a camera path finds through a translucent cylinder on a glossy floor or through glass is in Cycles' excess.
@@ -654,7 +654,8 @@ Found, not fixed yet (both renderers):
   is left: of the 13 scenes whose reference is more than 2 % off without a known cause, 10 hold a clearcoat (24,
   72, 89, 94, 99, 102, 118, 135, 146, 153; over metal in 72, 94, 99, 135 and 153), and the other three are noise
   (the reference's fireflies: 33, a small spot's caustic through sharp glass, which it path traces; 136, a sun
-  through glass and near-sharp Principled glass; and 143: Cycles, above). 67 of the 200 scenes hold a clearcoat, 36 of them over metal.
+  through glass and near-sharp Principled glass; and 143: Cycles, above). 67 of the 200 scenes hold a clearcoat,
+  36 of them over metal.
 """
 
 

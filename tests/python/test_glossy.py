@@ -64,10 +64,10 @@ def test_bad_roughness_is_refused_naming_it(roughness):
 
 @pytest.mark.parametrize("clear", [1.0, 0.5])
 def test_a_glossy_surface_sees_a_light_through_a_transparent_sheet(clear):
-    """A glossy floor (roughness 0.4) under an area light, with a transparent sheet between them: the sheet
-    dims the direct light by its colour on the way from the light and again on the way to the camera, no more. Light sampling's shadow rays passed the sheet, but the BSDF's
-    own directions stopped at it and lost their share of the multiple importance sampling (issue 18: the floor
-    was 0.55 of the same without the sheet)."""
+    """A glossy floor (roughness 0.4) under an area light, with a transparent sheet between them: the sheet dims
+    the direct light by its colour on the way from the light and again on the way to the camera, no more. Light
+    sampling's shadow rays passed the sheet, but the BSDF's own directions stopped at it and lost their share of
+    the multiple importance sampling (issue 18: the floor was 0.55 of the same without the sheet)."""
     def direct(sheet):
         scene = ps.Scene()
         scene.add_material(name="floor", kind="glossy", color=(0.5, 0.5, 0.5), roughness=0.4)
