@@ -552,7 +552,8 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   Direct light weighs light samples against BSDF-sampled probe rays; shadow rays passed transparent surfaces but
   the probes stopped at them, so the BSDF's share of a light, emitter or world beyond a clear surface was lost. The
   probes now pass transparency as shadow rays do. Test:
-  `test_glossy.py::test_a_glossy_surface_sees_a_light_through_a_transparent_sheet` (a glossy floor under an area light behind a clear sheet was 0.55 of the same without the sheet).
+  `test_glossy.py::test_a_glossy_surface_sees_a_light_through_a_transparent_sheet` (a glossy floor under an area
+  light behind a clear sheet was 0.55 of the same without the sheet).
 - **The Caustics pass left out what camera paths find beyond translucency** (a definition). Cycles' toggles drop
   a glossy, mirror or refracting closure right after a diffuse-labelled scatter, and a translucent one is diffuse:
   what a camera path finds through a translucent cylinder on a glossy floor or through glass is in Cycles' excess.
@@ -641,9 +642,9 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
 Found, not fixed yet (both renderers):
 
-- **A clearcoat over metal** (seed 153, a Principled floor of metallic 0.22 and clearcoat 0.84 under a spot of
-  radius 0.62; rooms whose Principled walls have a clearcoat: seeds 24, 99 and 102): 1.01–1.03 of Cycles in Photon
-  Splat and the reference alike, also against Cycles at 2 × 4096 samples (seeds 24, 99, 102: Photon Splat 1.016,
+- **A clearcoat, above all over metal** (seed 153, a Principled floor of metallic 0.22 and clearcoat 0.84 under a
+  spot of radius 0.62; rooms whose Principled walls have a clearcoat: seeds 24, 99 and 102): 1.01–1.03 of Cycles in
+  Photon Splat and the reference alike, also against Cycles at 2 × 4096 samples (seeds 24, 99, 102: Photon Splat 1.016,
   1.025, 1.012; the reference 1.024, 1.034, 1.020). Under seed 153's spot, the reference against Cycles at 1024
   samples: a clearcoat alone 1.0006 (where Cycles' own estimate is 1.6 times the clearcoat's light-sampled one:
   it samples the clearcoat with GGX visible normals and weighs it with the GTR1 density, as the engine now does),
