@@ -75,6 +75,8 @@ def parse_args(argv):
     parser.add_argument("--reference-agree", type=float, default=0.01)
     parser.add_argument("--reference-only", action="store_true",
                         help="render the reference again for scenes that have results, keeping the rest")
+    parser.add_argument("--keep-reference", action="store_true",
+                        help="with --redo: keep the reference of a scene's last results (an engine-only change)")
     parser.add_argument("--times", default=",".join(f"{t:g}" for t in TIMES), help="Photon Splat snapshots (s)")
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cycles-only", action="store_true", help="fill the Cycles cache only")
@@ -284,6 +286,15 @@ def blender_main(argv):
         scene.render.engine = 'PHOTONSPLAT'
         return export.export_frame(core, bpy.context.evaluated_depsgraph_get())
 
+    def kept_reference(seed):
+        """The reference image of the scene's last results as reference_pair returns it, or None."""
+        result_path, images_path = out / "results" / f"{seed}.json", out / "images" / f"{seed}.npz"
+        if not result_path.exists() or not images_path.exists():
+            return None
+        last = json.loads(result_path.read_text())["reference"]
+        return (np.load(images_path)["reference"].astype(np.float64), last["samples"], last["noise"],
+                last["seconds"])
+
     seeds = parse_seeds(args.seeds)
     if args.newer_cycles_worker:
         # Only Cycles, in a newer Blender (a bpy module), beside the results of the main run.
@@ -340,7 +351,8 @@ def blender_main(argv):
             continue
         frame = photonsplat_frame(scene)
         snapshots, warnings, ps_seconds = photonsplat_progressive(frame)
-        ref, ref_samples, ref_noise, ref_seconds = reference_pair(frame)
+        kept = kept_reference(seed) if args.keep_reference else None
+        ref, ref_samples, ref_noise, ref_seconds = kept or reference_pair(frame)
 
         c_mean = image_mean(cyc)
         excess = c_mean - image_mean(cyc_off)

@@ -230,6 +230,8 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         ViewSampleSettings view_settings;
         view_settings.seed = seed;
         view_settings.jitter = iteration.index > 0;
+        view_settings.sequence_seed = settings.seed;
+        view_settings.pass = iteration.index;
         view_settings.max_specular_depth = settings.max_bounces;
         view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);

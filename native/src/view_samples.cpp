@@ -16,6 +16,7 @@
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
+#include "photonsplat/sample_sequence.h"
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shading.h"
@@ -354,9 +355,9 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                         const size_t pixel = static_cast<size_t>(y) * width + x0 + k;
                         float jx = 0.5f, jy = 0.5f;
                         if (settings.jitter) {
-                            Rng jitter(settings.seed, RngDomain::pixel_jitter, pixel);
-                            jx = jitter.uniform();
-                            jy = jitter.uniform();
+                            float unused = 0.0f;
+                            SampleSequence(settings.sequence_seed, pixel, SampleSequence::kPixelStream)
+                                .point(settings.pass > 0 ? settings.pass - 1 : 0, jx, jy, unused);
                         }
                         camera_rays[k] =
                             camera.generate_ray(static_cast<float>(x0 + k) + jx, static_cast<float>(y) + jy);

@@ -25,6 +25,11 @@ pytestmark = pytest.mark.skipif(bpy.app.version >= (4, 0, 0), reason="measured a
 
 CYCLES_SAMPLES = 256
 ITERATIONS = 24
+# Scenes whose lit blocks hold a sliver of a light seen in a mirror, narrower than a pixel (seed 152: two pixels
+# of a block with 1.5 % of their area on the light, all of that block's light; seed 156 likewise at an ellipse
+# light's edge). Whether 24 passes land on it is chance, with random positions as with the pixels' stratified
+# sequence (152's block was 0 or 1.5 of Cycles' by the seed); 96 passes place 1.26 of its 1.21.
+ITERATIONS_OF = {152: 96, 156: 96}
 
 # seed: (what the scene guards, tolerance on |mean ratio - 1|, bounds on the ratio of 8 x 8 blocks holding a tenth of
 # the mean or more). The first six are regression scenes of biases the full set found; the others were within 2 %
@@ -38,8 +43,8 @@ SAMPLE = {
         "(that block was 0.71 of Cycles)", 0.03, (0.85, 1.3)),
     152: ("a rough glass wall seen from its back face reflects an area light by a mirror floor: a photon's power "
           "follows the refractions it made, not the face it lands on (the highlight was 1/ior^2 of Cycles, the "
-          "image 0.875; 0.986 at 16 s, 0.967 at these iterations, where the highlight's photons are still spread "
-          "wide, and a block at its edge up to 2.8x)", 0.05, (0.4, 3.5)),
+          "image 0.875; 0.986 at 16 s, 0.989 at its 96 passes, where the highlight's photons are still spread "
+          "wide, its blocks 0.75 to 1.33)", 0.05, (0.4, 3.5)),
     156: ("an ellipse light in view is seen as an ellipse, not as its rectangle (the image was 4/pi of Cycles, "
           "1.256)", 0.03, (0.45, 1.6)),
     150: ("a closed cylinder of translucent mixed with diffuse in a room under two soft point lights: the boundary "
@@ -48,7 +53,7 @@ SAMPLE = {
           "direct light does (the room alone was 5 % bright)", 0.03, (0.8, 1.25)),
     138: ("a floor's caustic behind a clearcoated Principled glass cylinder, under a spot: photons aimed at the "
           "glass go on through it after storing a caustic photon on its inside (the image was 0.90 of Cycles; 1.015 "
-          "at 16 s, 1.023 at these iterations, where the caustic's blocks are still 0.58 to 1.8)", 0.05, (0.4, 2.5)),
+          "at 16 s, 1.019 at these iterations, where the caustic's blocks are still 0.57 to 1.75)", 0.05, (0.4, 2.5)),
     8: ("a room at scale 0.01: metal, transparency", 0.03, (0.77, 1.3)),
     12: ("an open scene under a spot: Principled dielectric and glass", 0.03, (0.77, 1.3)),
     18: ("an open scene under an area light: emission, Principled glass", 0.03, (0.77, 1.3)),
@@ -82,17 +87,17 @@ def cycles_mean(blend, caustics=True):
     return render_exr(scene, blend.with_suffix(".exr"))[..., :3]
 
 
-def photonsplat_images(blend, core):
+def photonsplat_images(blend, core, iterations=ITERATIONS):
     from photonsplat import export
     bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
     scene = bpy.context.scene
     scene.render.engine = 'PHOTONSPLAT'
     frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
     settings = frame.settings
-    settings.iterations, settings.max_bounces, settings.threads, settings.seed = ITERATIONS, 16, 2, 1
+    settings.iterations, settings.max_bounces, settings.threads, settings.seed = iterations, 16, 2, 1
     settings.caustics_pass = True
     progressive = core.Progressive(frame.scene, frame.camera, settings)
-    for _ in range(ITERATIONS):
+    for _ in range(iterations):
         progressive.step()
     return np.asarray(progressive.image())[..., :3], np.asarray(progressive.passes()["caustics"])
 
@@ -103,7 +108,7 @@ def test_generated_scene_matches_cycles(seed, scenes, core):
     guards, tolerance, (low, high) = SAMPLE[seed]
     blend = scenes / f"random_{seed}.blend"
     cycles = cycles_mean(blend)
-    ours, _ = photonsplat_images(blend, core)
+    ours, _ = photonsplat_images(blend, core, ITERATIONS_OF.get(seed, ITERATIONS))
     ratio = ours.mean() / cycles.mean()
     print(f"\nseed {seed} ({guards}): mean ratio {ratio:.4f}")
     assert abs(ratio - 1.0) <= tolerance, guards

@@ -13,7 +13,6 @@ enum class RngDomain : uint64_t {
     photon = 3,
     light_choice = 4,
     emission_guide = 5,
-    pixel_jitter = 6,       // progressive passes after the first: where in its pixel a camera ray goes
     kernel_probe = 7,       // automatic radius: the rotation of a seen point's probe pattern (kernel_radius.cpp)
     kernel_coverage = 8,    // boundary correction: the rotation of a view sample's probe pattern (kernel_coverage.cpp)
     sample_sequence = 9,    // a pixel's scramble of its low-discrepancy points across iterations (sample_sequence.h)

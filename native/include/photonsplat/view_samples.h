@@ -77,10 +77,13 @@ struct ViewSamples {
 struct ViewSampleSettings {
     uint64_t seed = 0;
     int max_specular_depth = 8;   // bounces through mirror/glass before the path is dropped
-    // false: every ray through its pixel's centre (a one-shot render). true: through a point drawn uniformly in
-    // the pixel from the stream (seed, pixel_jitter, pixel); progressive passes after the first use it, so their
-    // mean is box-filtered over each pixel (anti-aliasing).
+    // false: every ray through its pixel's centre (a one-shot render). true: through point `pass` − 1 of the
+    // pixel's low-discrepancy sequence (SampleSequence(sequence_seed, pixel, kPixelStream)); progressive passes
+    // after the first use it, so their mean is box-filtered over each pixel (anti-aliasing), and a glint covering
+    // part of a pixel converges as Cycles' samples place it, not at the 1/√N of independent positions.
     bool jitter = false;
+    uint64_t sequence_seed = 0;  // the render's own seed: one sequence per pixel across its passes
+    uint32_t pass = 0;           // the progressive iteration (≥ 1 where jitter is on)
     // Follow every part of the BSDF at a camera path's first surface (the view sample of its lobes, the mirror,
     // the refraction, transparency, the rough transmission: a sample each), instead of one chosen with its
     // weight's probability. Later surfaces always choose one.
