@@ -201,10 +201,11 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             if (is_black(f)) continue;
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
+            const float p_light = in.pdf * cycles_mis_pick(b, sources.cycles_pick_probability(l));
             const float w = (delta || !weighted)
                                 ? 1.0f
-                                : (probes == n ? power_heuristic(in.pdf, bsdf_pdf(b, in.wi, set))
-                                               : power_heuristic(float(n) * in.pdf, float(probes) * bsdf_pdf(b, in.wi, set)));
+                                : (probes == n ? power_heuristic(p_light, bsdf_pdf(b, in.wi, set))
+                                               : power_heuristic(float(n) * p_light, float(probes) * bsdf_pdf(b, in.wi, set)));
             const ShadowSegment segment = shadow_segment(x, origin, in);
             shadow[pending] = segment.ray;
             t_min[pending] = 0.0f;
@@ -248,14 +249,16 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                 if (!light || sources.is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, x, bs.direction);
                 if (!h.hit || !(h.distance >= travelled) || (found && !(h.distance < travelled + hit.t))) continue;
-                bsdf_sum += bs.weight * through * h.radiance * power_heuristic(bs.pdf, h.pdf);
+                bsdf_sum += bs.weight * through * h.radiance *
+                            power_heuristic(bs.pdf, h.pdf * cycles_mis_pick(b, sources.cycles_pick_probability(l)));
             }
             if (!found) break;
             const Material& material =
                 scene.materials()[scene.meshes()[scene.instances()[hit.instance].mesh].materials[hit.triangle]];
             if (mis && (!is_black(material.emission) || material.program_emission) && !material.holdout) {
                 const glm::vec3 y = ray.origin + hit.t * ray.direction;
-                const float p_light = sources.emissive_pdf(hit.instance, hit.triangle, x, y);
+                const float p_light = sources.emissive_pdf(hit.instance, hit.triangle, x, y) *
+                                      cycles_mis_pick(b, sources.cycles_emissive_pick_probability());
                 if (p_light > 0.0f) {
                     const glm::vec3 emitted = material.program_emission
                                                   ? emission_at(scene, surface_at(scene, ray, hit), -ray.direction)
@@ -274,7 +277,8 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         if (found) continue;  // an opaque surface, or the crossings' limit
         if (world_sampled) {
             // A programmed world: whatever the BSDF sampled, weighted against the world's map (and portals).
-            const float p_light = sources.world().pdf(x, side, bs.direction);
+            const float p_light = sources.world().pdf(x, side, bs.direction) *
+                                  cycles_mis_pick(b, sources.cycles_lamp_pick_probability());
             const float w = power_heuristic(float(m) * bs.pdf, float(world_samples) * p_light);
             bsdf_sum += bs.weight * through * world_radiance(scene, bs.direction, ShaderRay::reflected) * w;
         } else {

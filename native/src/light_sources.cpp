@@ -70,6 +70,14 @@ LightSources::LightSources(const Scene& scene) : scene_(scene), world_(scene.wor
                                                   : world_->flux(radius_);
         if (luminance(flux) > 0.0f && std::isfinite(luminance(flux))) sources_.push_back({Kind::world, "world", flux});
     }
+    // Cycles' light distribution (cycles_pick_probability): its lamps, and a world only where it varies (Cycles
+    // turns a constant background's light sampling off).
+    size_t lamps = 0;
+    for (const Source& source : sources_)
+        if (source.kind == Kind::light || (source.kind == Kind::world && !world_->constant())) ++lamps;
+    const bool triangles = !emitters_.empty();
+    if (lamps > 0) lamp_pick_ = (triangles ? 0.5f : 1.0f) / static_cast<float>(lamps);
+    emissive_pick_ = lamps > 0 ? 0.5f : 1.0f;
 }
 
 bool LightSources::is_delta(size_t i) const {

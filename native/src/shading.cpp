@@ -258,6 +258,14 @@ bool bsdf_has(const Bsdf& b, LobeSet set) {
     return false;
 }
 
+bool bsdf_has_clearcoat(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (b.lobes[k].distribution == Distribution::gtr1) return true;
+    return false;
+}
+
+float cycles_mis_pick(const Bsdf& b, float cycles_pick) { return bsdf_has_clearcoat(b) ? cycles_pick : 1.0f; }
+
 BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2) {
     return sample_choice(b, lobe_choice(b, set), u0, u1, u2);
 }

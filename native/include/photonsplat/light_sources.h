@@ -35,6 +35,17 @@ public:
     // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
+    // The probability that Cycles 3.4 picks source i for a shading point's one light sample: its light
+    // distribution splits its picks evenly over the lamps (a world it importance-samples counts as one), and gives
+    // emissive triangles half of them where there are lamps too. We sample every source at every point, so our
+    // own MIS weights need none of this; Cycles' weights include it, which changes what Cycles converges to where
+    // a BSDF's sampling density is not what it reports (the clearcoat: cycles_mis_pick, shading.h).
+    float cycles_pick_probability(size_t i) const {
+        return sources_[i].kind == Kind::emissive_surfaces ? emissive_pick_ : lamp_pick_;
+    }
+    float cycles_lamp_pick_probability() const { return lamp_pick_; }  // a scene light or a programmed world
+    float cycles_emissive_pick_probability() const { return emissive_pick_; }
+
     // A sun or a programmed world: its photons start on a disc covering the scene (or on a portal), placed by
     // sample_emission's u1, u2 (an area-preserving map), which an EmissionGuide may redistribute.
     bool emits_from_disc(size_t i) const {
@@ -71,6 +82,7 @@ private:
     glm::vec3 focus_center_{0.0f};
     float focus_radius_ = 0.0f;
     std::vector<Source> sources_;
+    float lamp_pick_ = 1.0f, emissive_pick_ = 1.0f;  // cycles_pick_probability
     // Emissive triangles of every instance (an instanced emissive mesh lights the scene once per copy), chosen
     // in proportion to world-space area × luminance of their emission.
     struct Emitter {

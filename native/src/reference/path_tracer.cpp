@@ -98,7 +98,8 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
             shadow_segment(s.position, offset_ray_origin(s.position, side, s.rounding_scale), in);
         const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
-        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf, bsdf_sample_pdf(b, in.wi));
+        const float pick = cycles_mis_pick(b, c.sources.cycles_pick_probability(l));
+        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf * pick, bsdf_sample_pdf(b, in.wi));
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
     return sum;
@@ -110,6 +111,8 @@ struct LastScatter {
     bool specular_since = false;   // and one or more specular vertices since it
     glm::vec3 x{0.0f};             // that vertex
     float pdf = 0.0f;              // its BSDF sample's density
+    bool clearcoat = false;        // it held a clearcoat: lights' densities take Cycles' pick (cycles_mis_pick)
+    float pick(float cycles_pick) const { return clearcoat ? cycles_pick : 1.0f; }
 };
 
 // Weight of a light met by the current ray, or < 0 when that path belongs to the photons.
@@ -146,7 +149,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
-                const float w = light_weight(last, c.photon_caustics[l] != 0, drawn.hit ? drawn.pdf : h.pdf);
+                const float w = light_weight(last, c.photon_caustics[l] != 0,
+                                             (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l)));
                 if (w > 0.0f) radiance += throughput * h.radiance * w;
             }
         }
@@ -156,7 +160,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             const glm::vec3 L = world_radiance(scene, ray.direction, depth > 0 ? ShaderRay::reflected : ShaderRay::camera);
             const bool sampled = !world.constant() && !world.black();
             const float w = sampled ? light_weight(last, false, last.nonspecular && !last.specular_since
-                                                                    ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction)
+                                                                    ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction) *
+                                                                          last.pick(c.sources.cycles_lamp_pick_probability())
                                                                     : 0.0f)
                                     : 1.0f;
             radiance += throughput * L * w;
@@ -167,7 +172,10 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         if (m.emission != glm::vec3(0.0f) || m.program_emission) {
             // Emissive triangles are one source of the path tracer (never photon-mapped).
             const float light_pdf =
-                last.nonspecular && !last.specular_since ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) : 0.0f;
+                last.nonspecular && !last.specular_since
+                    ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) *
+                          last.pick(c.sources.cycles_emissive_pick_probability())
+                    : 0.0f;
             radiance += throughput * emission_at(scene, s, -ray.direction) * light_weight(last, false, light_pdf);
         }
         const Bsdf b = shade(scene, s, -ray.direction);
@@ -191,7 +199,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), bs.direction};
         // Transparency lets the ray go on as it was: its MIS state stays that of the last real scatter.
         if (bs.kind == ScatterKind::lobes)
-            last = LastScatter{true, false, s.position, bs.pdf};
+            last = LastScatter{true, false, s.position, bs.pdf, bsdf_has_clearcoat(b)};
         else if (bs.kind != ScatterKind::transparent)
             last.specular_since = true;
         if (bs.kind != ScatterKind::transparent) camera_ray = false;
