@@ -60,6 +60,7 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.ng = s.normal;
     b.wo = s.wo;
     b.lambert = s.albedo;
+    b.defensive = !(s.flags & kViaSpecular);  // the camera's first hit (shading.h); only its reflection parts known
     b.lobe_count = 0;
     if (s.flags & kGlossy) {
         b.lobe_count = static_cast<int>(std::min<uint32_t>(s.lobe_count, kMaxLobes));

@@ -47,15 +47,39 @@ struct LobeChoice {
     float total = 0.0f;
 };
 
+// A part's selection weight raised to the floor where the part is there at all.
+float at_least(float weight, bool present, float floor) { return present ? std::max(weight, floor) : weight; }
+
+// The delta parts' summed selection weight (bsdf_sample), each raised to `floor`.
+float delta_sampling_weight(const Bsdf& b, float floor) {
+    return at_least(luminance(b.mirror), !is_zero(b.mirror), floor) +
+           at_least(luminance(b.refraction), !is_zero(b.refraction), floor) +
+           at_least(luminance(b.transparent), !is_zero(b.transparent), floor);
+}
+
+// Bsdf::defensive: the least selection weight of a part, 1/8 of the parts' summed weights as Cycles sums them
+// (every closure); 0 where it does not apply.
+float defensive_floor(const Bsdf& b) {
+    if (!b.defensive || !bsdf_has_clearcoat(b)) return 0.0f;
+    float sum = luminance(b.lambert) + delta_sampling_weight(b, 0.0f);
+    for (int k = 0; k < b.lobe_count; ++k) {
+        const float w = lobe_sampling_weight(b.lobes[k], b.n, b.wo);
+        if (std::isfinite(w)) sum += std::max(w, 0.0f);
+    }
+    return 0.125f * sum;
+}
+
 LobeChoice lobe_choice(const Bsdf& b, LobeSet set) {
     LobeChoice c;
+    const float floor = defensive_floor(b);
     c.set = set;
-    if (set != LobeSet::transmission) c.lambert = luminance(b.lambert);
+    if (set != LobeSet::transmission) c.lambert = at_least(luminance(b.lambert), !is_zero(b.lambert), floor);
     c.total = c.lambert;
     for (int k = 0; k < b.lobe_count; ++k) {
         if (!in_set(b.lobes[k], set)) continue;
         c.lobe[k] = std::max(0.0f, lobe_sampling_weight(b.lobes[k], b.n, b.wo));
         if (!std::isfinite(c.lobe[k])) c.lobe[k] = 0.0f;
+        c.lobe[k] = at_least(c.lobe[k], !is_zero(b.lobes[k].weight), floor);
         c.total += c.lobe[k];
     }
     return c;
@@ -286,15 +310,9 @@ bool refraction_direction(const Bsdf& b, glm::vec3& direction) {
     return true;
 }
 
-namespace {
-float delta_sampling_weight(const Bsdf& b) {
-    return luminance(b.mirror) + luminance(b.refraction) + luminance(b.transparent);
-}
-}  // namespace
-
 float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
-    const float total = lobes.total + delta_sampling_weight(b);
+    const float total = lobes.total + delta_sampling_weight(b, defensive_floor(b));
     if (!(lobes.total > 0.0f) || !(total > 0.0f)) return 0.0f;
     return choice_pdf(b, lobes, wi) * (lobes.total / total);
 }
@@ -315,8 +333,10 @@ float photon_units_across(const Bsdf& b, const BsdfSample& s) {
 
 BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
-    const float w_mirror = luminance(b.mirror), w_refraction = luminance(b.refraction),
-                w_transparent = luminance(b.transparent);
+    const float floor = defensive_floor(b);
+    const float w_mirror = at_least(luminance(b.mirror), !is_zero(b.mirror), floor),
+                w_refraction = at_least(luminance(b.refraction), !is_zero(b.refraction), floor),
+                w_transparent = at_least(luminance(b.transparent), !is_zero(b.transparent), floor);
     const float total = lobes.total + w_mirror + w_refraction + w_transparent;
     BsdfSample out;
     if (!(total > 0.0f) || !std::isfinite(total)) return out;

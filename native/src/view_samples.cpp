@@ -182,7 +182,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s, -ray.direction), -ray.direction, path.throughput);
             return;
         }
-        const Bsdf b = shade(scene, s, -ray.direction);
+        Bsdf b = shade(scene, s, -ray.direction);
+        b.defensive = path.depth == 0;  // the camera's first hit: Cycles' defensive sampling (shading.h)
 
         // The parts and their weights (luminance of what each scatters, roughly), indexed: 0 the reflection parts
         // (the view sample), 1 the transmission lobes, 2 the mirror, 3 the sharp refraction, 4 transparency.

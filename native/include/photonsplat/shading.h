@@ -33,6 +33,11 @@ struct Bsdf {
     glm::vec3 refraction{0.0f};      // Σ sharp refraction weights
     float refraction_eta = 1.0f;     // n_other / n_this of the (first) sharp refraction
     glm::vec3 transparent{0.0f};     // Σ transparent weights
+    // The camera's first hit (no transparency or specular part before it). Cycles samples there "defensively":
+    // each closure is chosen with at least 1/8 of the closures' summed sampling weight. That changes only the
+    // noise, except with a clearcoat, whose estimate is Cycles' own (docs/closures.md), so it is followed where
+    // the BSDF holds one (a clearcoat over metal under a constant world: 1.055 of Cycles without it).
+    bool defensive = false;
 
     bool has_lobes() const { return lobe_count > 0 || lambert != glm::vec3(0.0f); }
     bool directional() const { return lobe_count > 0; }  // the value depends on directions beyond Lambert's

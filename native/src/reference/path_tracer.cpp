@@ -178,7 +178,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                     : 0.0f;
             radiance += throughput * emission_at(scene, s, -ray.direction) * light_weight(last, false, light_pdf);
         }
-        const Bsdf b = shade(scene, s, -ray.direction);
+        Bsdf b = shade(scene, s, -ray.direction);
+        b.defensive = depth == 0;  // the camera's first hit: Cycles' defensive sampling (shading.h)
         if (bsdf_has(b, LobeSet::all)) {
             radiance += throughput * sample_lights(c, b, s, rng, counters);
             if (c.caustics && bsdf_has(b, LobeSet::reflection)) {
