@@ -669,23 +669,23 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
   1.57 % apart at 8192 samples). The engine needs the same gather: a view sample's far side taking the caustic
   photons stored there through its transmission parts.
 
-Found, not fixed yet (both renderers):
+- **A clearcoat's reflection of the scene's indirect light**: Photon Splat gathers photons at a clearcoat by its
+  GTR1 value, while Cycles' estimate of that light (its BSDF-sampled rays) reflects what lies in the mirror
+  direction almost as a mirror (the visible normals of α = 0.0009 at the default clearcoat roughness). Where the
+  reference now agrees with Cycles, Photon Splat stays 1–2 % bright in rooms of clearcoated walls: seeds 24, 89, 99
+  and 102 at 1.015, 1.020, 1.018 and 1.013 (the reference 1.005, 1.005, 1.001, 0.999). Following the clearcoat's
+  mirror-like part with the camera path, as glass and mirrors are followed, would match it.
 
-- **A clearcoat, above all over metal** (seed 153, a Principled floor of metallic 0.22 and clearcoat 0.84 under a
-  spot of radius 0.62; rooms whose Principled walls have a clearcoat: seeds 24, 99 and 102): 1.01–1.03 of Cycles in
-  Photon Splat and the reference alike, also against Cycles at 2 × 4096 samples (seeds 24, 99, 102: Photon Splat 1.016,
-  1.025, 1.012; the reference 1.024, 1.034, 1.020). Under seed 153's spot, the reference against Cycles at 1024
-  samples: a clearcoat alone 1.0006 (where Cycles' own estimate is 1.6 times the clearcoat's light-sampled one:
-  it samples the clearcoat with GGX visible normals and weighs it with the GTR1 density, as the engine now does),
-  metal alone 1.0013, the clearcoat over dielectric specular 1.0015, over diffuse 1.0031, over metal 1.019 (and
-  0.966 with a clearcoat roughness of 0.2: the two parts together, not either alone); a Lambert floor under that
-  spot 1.0002. The biased estimator's result depends on everything its MIS weight sees: choosing closures by
-  their weights' mean (as Cycles) instead of their luminance left it unchanged. This is the lead for most of what
-  is left: of the 13 scenes whose reference is more than 2 % off without a known cause, 10 hold a clearcoat (24,
-  72, 89, 94, 99, 102, 118, 135, 146, 153; over metal in 72, 94, 99, 135 and 153), and the other three are noise
-  (the reference's fireflies: 33, a small spot's caustic through sharp glass, which it path traces; 136, a sun
-  through glass and near-sharp Principled glass; and 143: Cycles, above). 67 of the 200 scenes hold a clearcoat,
-  36 of them over metal.
+Found, not fixed yet (the reference; the second both):
+
+- **Spot caustics and small scenes' fireflies in the reference**: it path traces a spot's caustic through sharp
+  glass (photon-maps only point lights and suns), and its pair of seeds can agree within 1 % while a firefly sits
+  in one: seeds 4 and 33 (1.033 and 1.022, pair noise 0.7 % and 2.2 %), 56, 135 and 136 (0.962, 1.025, 1.022, noise
+  0.8–1.0 %). Mapping spot caustics with photons (tried on 33: it then matches Photon Splat) and asking the pair
+  to agree within its own noise, not 1 %, would settle them.
+- **Rooms of glass and Principled surfaces under spots** (seeds 118, 146 and 72: the reference 0.947, 0.937,
+  0.977, Photon Splat 0.958, 0.923, 0.977), each with sharp glass lit by a spot or a point light, where Cycles'
+  own caustics are least converged (146: its pair 0.8 % apart at 2 × 2048 samples). Not isolated yet.
 """
 
 
