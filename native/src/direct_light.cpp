@@ -203,10 +203,10 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
             const float p_light = in.pdf * cycles_mis_pick(b, sources.cycles_pick_probability(l));
-            const float w = (delta || !weighted)
-                                ? 1.0f
-                                : (probes == n ? power_heuristic(p_light, bsdf_pdf(b, in.wi, set))
-                                               : power_heuristic(float(n) * p_light, float(probes) * bsdf_pdf(b, in.wi, set)));
+            const float p_bsdf = (delta || !weighted) ? 0.0f : bsdf_pdf(b, in.wi, set);
+            const float w = (delta || !weighted) ? 1.0f
+                            : probes == n        ? power_heuristic(p_light, p_bsdf)
+                                                 : power_heuristic(float(n) * p_light, float(probes) * p_bsdf);
             const ShadowSegment segment = shadow_segment(x, origin, in);
             shadow[pending] = segment.ray;
             t_min[pending] = 0.0f;

@@ -79,4 +79,5 @@ def test_the_boundary_correction_keeps_a_large_radius_s_light(room, radius, tole
     mean_large, indirect_large = splat(scene, camera, radius, correction=True)
     # Measured: indirect 0.998 (0.3) and 0.980 (0.5) of the small radius's; without the correction 0.933, 0.849.
     assert indirect_large == pytest.approx(indirect_small, rel=0.025)
-    assert mean_large / reference == pytest.approx(1.0, abs=tolerance)  # measured 0.994, 0.977 (uncorrected 0.936, 0.861)
+    # Measured 0.994, 0.977 (uncorrected 0.936, 0.861).
+    assert mean_large / reference == pytest.approx(1.0, abs=tolerance)

@@ -149,8 +149,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
-                const float w = light_weight(last, c.photon_caustics[l] != 0,
-                                             (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l)));
+                const float pdf = (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l));
+                const float w = light_weight(last, c.photon_caustics[l] != 0, pdf);
                 if (w > 0.0f) radiance += throughput * h.radiance * w;
             }
         }
@@ -159,11 +159,11 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             const WorldLight& world = c.sources.world();
             const glm::vec3 L = world_radiance(scene, ray.direction, depth > 0 ? ShaderRay::reflected : ShaderRay::camera);
             const bool sampled = !world.constant() && !world.black();
-            const float w = sampled ? light_weight(last, false, last.nonspecular && !last.specular_since
-                                                                    ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction) *
-                                                                          last.pick(c.sources.cycles_lamp_pick_probability())
-                                                                    : 0.0f)
-                                    : 1.0f;
+            const float world_pdf = last.nonspecular && !last.specular_since
+                                        ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction) *
+                                              last.pick(c.sources.cycles_lamp_pick_probability())
+                                        : 0.0f;
+            const float w = sampled ? light_weight(last, false, world_pdf) : 1.0f;
             radiance += throughput * L * w;
             break;
         }
