@@ -4,7 +4,7 @@
 // At a non-specular vertex x (diffuse, or glossy rough enough to be a lobe):
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
 //     w = p_light² / (p_light² + p_bsdf²); delta lights (p_light = 0 by convention) get w = 1;
-//   - this pass's caustic photons are gathered (the L S+ D paths of point lights and suns: never counted here),
+//   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns: never counted here),
 //     through the reflection parts from x's side and through the transmission parts from the other;
 //   - one BSDF direction is sampled; whatever light that ray meets next (an analytic light in front of the
 //     first surface, an emissive triangle, a sun's cone when it escapes) is weighted w = p_bsdf² / (p_bsdf² +
