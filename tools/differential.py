@@ -679,11 +679,17 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
 Found, not fixed yet (the reference; the second both):
 
-- **Spot caustics and small scenes' fireflies in the reference**: it path traces a spot's caustic through sharp
-  glass (photon-maps only point lights and suns), and its pair of seeds can agree within 1 % while a firefly sits
-  in one: seeds 4 and 33 (1.033 and 1.022, pair noise 0.7 % and 2.2 %), 56, 135 and 136 (0.962, 1.025, 1.022, noise
-  0.8–1.0 %). Mapping spot caustics with photons (tried on 33: it then matches Photon Splat) and asking the pair
-  to agree within its own noise, not 1 %, would settle them.
+- **The reference's pair of seeds can agree within 1 % while a firefly sits in one**: seeds 56, 135 and 136
+  (0.962, 1.025, 1.022, the pair 0.8–1.0 % apart). Asking the pair to agree within its own noise would catch
+  them. (Spots' caustics through sharp glass were such fireflies, path traced: they are photon-mapped now, as
+  point lights' are; seed 4 1.033 → 1.002, 33 1.022 → 1.019.)
+- **Photons gathered through a near-sharp rough lobe lose light** (the reference). Seed 118's Principled glass
+  sphere of roughness 0.033 (α = 0.0011, a lobe, not a delta) passes the caustics of the room's spot and point
+  light, and the reference's vertices on it gather those photons through that lobe over a kernel on a curved
+  surface: with photons 0.946 of its path tracing alone at the same samples, 0.988 with the sphere hidden, and
+  unchanged from 128 to 2048 passes (not the kernel's shrinking bias). Against Cycles: path tracing alone 0.968,
+  photon-mapped point light 0.947, point and spot 0.913. Leaving light seen through such lobes to the path
+  tracer (or sending photons on through them) would fix it.
 - **Rooms of glass and Principled surfaces under spots** (seeds 118, 146 and 72: the reference 0.947, 0.937,
   0.977, Photon Splat 0.958, 0.923, 0.977), each with sharp glass lit by a spot or a point light, where Cycles'
   own caustics are least converged (146: its pair 0.8 % apart at 2 × 2048 samples). Not isolated yet.
