@@ -30,7 +30,8 @@ constexpr float kCosNormalTolerance = 0.5f;  // τ = 60°, render()'s default
 
 bool caustics_by_photons(const LightSources& sources, size_t i) {
     const Light* light = sources.light(i);
-    return light && (light->kind == LightKind::point || light->kind == LightKind::spot || light->kind == LightKind::sun);
+    return light &&
+           (light->kind == LightKind::point || light->kind == LightKind::spot || light->kind == LightKind::sun);
 }
 
 std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources& sources, uint64_t count,

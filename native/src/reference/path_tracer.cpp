@@ -3,9 +3,11 @@
 //
 // At a non-specular vertex x (diffuse, or glossy rough enough to be a lobe):
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
-//     w = p_light² / (p_light² + p_bsdf²); delta lights (p_light = 0 by convention) get w = 1;
-//   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns: never counted here),
-//     through the reflection parts from x's side and through the transmission parts from the other;
+//     w = p_light² / (p_light² + p_bsdf²) (where x holds a clearcoat, p_light times Cycles' probability of
+//     picking that light: cycles_mis_pick); delta lights (p_light = 0 by convention) get w = 1;
+//   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns, never
+//     counted here), through the reflection parts from x's side and through the transmission parts from the
+//     other;
 //   - one BSDF direction is sampled; whatever light that ray meets next (an analytic light in front of the
 //     first surface, an emissive triangle, a sun's cone when it escapes) is weighted w = p_bsdf² / (p_bsdf² +
 //     p_light²). A constant world has no light sampling here, so it always gets w = 1; a programmed world
