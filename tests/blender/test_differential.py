@@ -5,7 +5,8 @@ Each scene is drawn by blend_scenes/make_random_scenes.py in the run (a fresh cl
 (the oracle as tools/differential.py runs it: 16 bounces, no denoising, at scale 1 around the origin) and by Photon
 Splat progressive for a fixed number of iterations with 16 bounces, and the image means are compared. The
 tolerances hold Cycles' noise at these samples and Photon Splat's at these iterations; each scene says what it
-guards. Under Debian's Blender 3.4 only: the sample was measured against Cycles 3.4, and it costs about a minute.
+guards. Under Debian's Blender 3.4 only: the sample was measured against Cycles 3.4, and it costs about a minute
+and a half (the clearcoat tests half a minute of it).
 """
 
 import json
@@ -192,8 +193,8 @@ def test_a_clearcoat_over_metal_is_chosen_defensively_at_the_first_hit(scenes, c
     """At the camera's first hit Cycles chooses each closure with at least 1/8 of their summed weights (defensive
     sampling), which changes what its clearcoat converges to: over a grey metal, whose weight is about 50 times the
     clearcoat's, the clearcoat is chosen about 8 times as often. Seed 153's floor as a clearcoat over metal, under
-    a constant world alone (BSDF sampling only) and under its spot: the reference and the engine were 1.055 and
-    1.020 of Cycles (issue 18: seed 24's room of clearcoated walls without its glass, 1.027)."""
+    a constant world alone (BSDF sampling only) and under its spot: the reference was 1.055 and 1.020 of Cycles
+    before (issue 18: seed 24's room of clearcoated walls without its glass, 1.027)."""
     cycles, reference, photonsplat = clearcoat_floor(scenes, core, metal=True, world_only=world_only,
                                                      world_strength=1.0 if world_only else 0.0)
     print(f"\nCycles {cycles:.5f}, reference {reference / cycles:.4f} of it, Photon Splat {photonsplat / cycles:.4f}")
