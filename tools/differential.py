@@ -587,11 +587,12 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   estimate whose value depends on two choices the engines made otherwise. (1) Its MIS weights hold the
   probability of picking the light among all lights (one light per shading point): on seed 153's clearcoat floor
   a 0.001 W lamp added 50 m away took 2.9 % off the image in Cycles and nothing in ours; where a BSDF holds a
-  clearcoat the light's density in our weights now takes Cycles' pick (`cycles_mis_pick`). (2) At the camera's
-  first hit it chooses each closure with at least 1/8 of their summed weights (defensive sampling), so a
-  clearcoat over metal, about 1/50 of the metal's weight, is chosen some 8 times as often; `Bsdf::defensive`
-  follows it where the BSDF holds a clearcoat. A clearcoat over grey metal under a constant world: 1.055 → 1.000
-  of Cycles (reference and Photon Splat), under seed 153's spot 1.0195 → 1.0006. In the full scenes the
+  clearcoat the light's density in our weights now takes Cycles' pick (`bsdf_has_clearcoat`, shading.h).
+  (2) At the camera's first hit it chooses each closure with at least 1/8 of their summed weights (defensive
+  sampling), so a clearcoat over metal, about 1/50 of the metal's weight, is chosen some 8 times as often;
+  `choose_defensively` follows it where the BSDF holds a clearcoat. A clearcoat over grey metal under a constant
+  world: the reference 1.055 → 1.000 of Cycles (Photon Splat now 1.000 too), under seed 153's spot 1.0195 →
+  1.0006. In the full scenes the
   reference went 1.024 → 1.005 (seed 24), 1.033 → 1.001 (99), 1.022 → 0.999 (102), 1.022 → 1.005 (89) and
   0.975 → 0.999 (94); seed 153 went 1.031 → 1.001 (Photon Splat) and 1.036 → 1.002 (the reference).
   Tests: `test_differential.py::test_a_clearcoat_follows_cycles_light_pick` and

@@ -60,12 +60,13 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.ng = s.normal;
     b.wo = s.wo;
     b.lambert = s.albedo;
-    b.defensive = !(s.flags & kViaSpecular);  // the camera's first hit (shading.h); only its reflection parts known
     b.lobe_count = 0;
     if (s.flags & kGlossy) {
         b.lobe_count = static_cast<int>(std::min<uint32_t>(s.lobe_count, kMaxLobes));
         for (int k = 0; k < b.lobe_count; ++k) b.lobes[k] = lobes[s.lobe_begin + static_cast<uint32_t>(k)];
     }
+    b.selection_floor = 0.0f;
+    if (!(s.flags & kViaSpecular)) choose_defensively(b);  // the camera's first hit; its reflection parts only
 }
 
 }  // namespace
@@ -134,6 +135,9 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     const bool mis = transmission || b.directional();
     const glm::vec3 origin = offset_ray_origin(x, side, rounding_scale);
     const RayTracer& tracer = scene.ray_tracer();
+    // A light's density in the MIS weights takes Cycles' probability of picking it where b holds a clearcoat.
+    const bool clearcoat = bsdf_has_clearcoat(b);
+    const auto mis_pick = [clearcoat](float cycles_pick) { return clearcoat ? cycles_pick : 1.0f; };
     glm::vec3 sum(0.0f);
     bool any_area = false;
     const bool world_constant = sources.world().constant();
@@ -202,7 +206,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             if (is_black(f)) continue;
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
-            const float p_light = in.pdf * cycles_mis_pick(b, sources.cycles_pick_probability(l));
+            const float p_light = in.pdf * mis_pick(sources.cycles_pick_probability(l));
             const float p_bsdf = (delta || !weighted) ? 0.0f : bsdf_pdf(b, in.wi, set);
             const float w = (delta || !weighted) ? 1.0f
                             : probes == n        ? power_heuristic(p_light, p_bsdf)
@@ -251,7 +255,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                 const LightHit h = intersect_light(*light, x, bs.direction);
                 if (!h.hit || !(h.distance >= travelled) || (found && !(h.distance < travelled + hit.t))) continue;
                 bsdf_sum += bs.weight * through * h.radiance *
-                            power_heuristic(bs.pdf, h.pdf * cycles_mis_pick(b, sources.cycles_pick_probability(l)));
+                            power_heuristic(bs.pdf, h.pdf * mis_pick(sources.cycles_pick_probability(l)));
             }
             if (!found) break;
             const Material& material =
@@ -259,7 +263,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             if (mis && (!is_black(material.emission) || material.program_emission) && !material.holdout) {
                 const glm::vec3 y = ray.origin + hit.t * ray.direction;
                 const float p_light = sources.emissive_pdf(hit.instance, hit.triangle, x, y) *
-                                      cycles_mis_pick(b, sources.cycles_emissive_pick_probability());
+                                      mis_pick(sources.cycles_emissive_pick_probability());
                 if (p_light > 0.0f) {
                     const glm::vec3 emitted = material.program_emission
                                                   ? emission_at(scene, surface_at(scene, ray, hit), -ray.direction)
@@ -279,7 +283,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         if (world_sampled) {
             // A programmed world: whatever the BSDF sampled, weighted against the world's map (and portals).
             const float p_light = sources.world().pdf(x, side, bs.direction) *
-                                  cycles_mis_pick(b, sources.cycles_lamp_pick_probability());
+                                  mis_pick(sources.cycles_lamp_pick_probability());
             const float w = power_heuristic(float(m) * bs.pdf, float(world_samples) * p_light);
             bsdf_sum += bs.weight * through * world_radiance(scene, bs.direction, ShaderRay::reflected) * w;
         } else {

@@ -57,21 +57,9 @@ float delta_sampling_weight(const Bsdf& b, float floor) {
            at_least(luminance(b.transparent), !is_zero(b.transparent), floor);
 }
 
-// Bsdf::defensive: the least selection weight of a part, 1/8 of the parts' summed weights as Cycles sums them
-// (every closure); 0 where it does not apply.
-float defensive_floor(const Bsdf& b) {
-    if (!b.defensive || !bsdf_has_clearcoat(b)) return 0.0f;
-    float sum = luminance(b.lambert) + delta_sampling_weight(b, 0.0f);
-    for (int k = 0; k < b.lobe_count; ++k) {
-        const float w = lobe_sampling_weight(b.lobes[k], b.n, b.wo);
-        if (std::isfinite(w)) sum += std::max(w, 0.0f);
-    }
-    return 0.125f * sum;
-}
-
 LobeChoice lobe_choice(const Bsdf& b, LobeSet set) {
     LobeChoice c;
-    const float floor = defensive_floor(b);
+    const float floor = b.selection_floor;
     c.set = set;
     if (set != LobeSet::transmission) c.lambert = at_least(luminance(b.lambert), !is_zero(b.lambert), floor);
     c.total = c.lambert;
@@ -288,7 +276,17 @@ bool bsdf_has_clearcoat(const Bsdf& b) {
     return false;
 }
 
-float cycles_mis_pick(const Bsdf& b, float cycles_pick) { return bsdf_has_clearcoat(b) ? cycles_pick : 1.0f; }
+void choose_defensively(Bsdf& b) {
+    b.selection_floor = 0.0f;
+    if (!bsdf_has_clearcoat(b)) return;
+    // 1/8 of the parts' summed weights, as Cycles sums its closures'.
+    float sum = luminance(b.lambert) + delta_sampling_weight(b, 0.0f);
+    for (int k = 0; k < b.lobe_count; ++k) {
+        const float w = lobe_sampling_weight(b.lobes[k], b.n, b.wo);
+        if (std::isfinite(w)) sum += std::max(w, 0.0f);
+    }
+    b.selection_floor = 0.125f * sum;
+}
 
 BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2) {
     return sample_choice(b, lobe_choice(b, set), u0, u1, u2);
@@ -312,7 +310,7 @@ bool refraction_direction(const Bsdf& b, glm::vec3& direction) {
 
 float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
-    const float total = lobes.total + delta_sampling_weight(b, defensive_floor(b));
+    const float total = lobes.total + delta_sampling_weight(b, b.selection_floor);
     if (!(lobes.total > 0.0f) || !(total > 0.0f)) return 0.0f;
     return choice_pdf(b, lobes, wi) * (lobes.total / total);
 }
@@ -333,7 +331,7 @@ float photon_units_across(const Bsdf& b, const BsdfSample& s) {
 
 BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
-    const float floor = defensive_floor(b);
+    const float floor = b.selection_floor;
     const float w_mirror = at_least(luminance(b.mirror), !is_zero(b.mirror), floor),
                 w_refraction = at_least(luminance(b.refraction), !is_zero(b.refraction), floor),
                 w_transparent = at_least(luminance(b.transparent), !is_zero(b.transparent), floor);

@@ -183,7 +183,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             return;
         }
         Bsdf b = shade(scene, s, -ray.direction);
-        b.defensive = path.depth == 0;  // the camera's first hit: Cycles' defensive sampling (shading.h)
+        if (path.depth == 0) choose_defensively(b);  // the camera's first hit (shading.h)
 
         // The parts and their weights (luminance of what each scatters, roughly), indexed: 0 the reflection parts
         // (the view sample), 1 the transmission lobes, 2 the mirror, 3 the sharp refraction, 4 transparency.

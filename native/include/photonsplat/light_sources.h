@@ -39,7 +39,7 @@ public:
     // distribution splits its picks evenly over the lamps (a world it importance-samples counts as one), and gives
     // emissive triangles half of them where there are lamps too. We sample every source at every point, so our
     // own MIS weights need none of this; Cycles' weights include it, which changes what Cycles converges to where
-    // a BSDF's sampling density is not what it reports (the clearcoat: cycles_mis_pick, shading.h).
+    // a BSDF's sampling density is not what it reports (the clearcoat: bsdf_has_clearcoat, shading.h).
     float cycles_pick_probability(size_t i) const {
         return sources_[i].kind == Kind::emissive_surfaces ? emissive_pick_ : lamp_pick_;
     }

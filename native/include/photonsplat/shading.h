@@ -33,11 +33,8 @@ struct Bsdf {
     glm::vec3 refraction{0.0f};      // Σ sharp refraction weights
     float refraction_eta = 1.0f;     // n_other / n_this of the (first) sharp refraction
     glm::vec3 transparent{0.0f};     // Σ transparent weights
-    // The camera's first hit (no transparency or specular part before it). Cycles samples there "defensively":
-    // each closure is chosen with at least 1/8 of the closures' summed sampling weight. That changes only the
-    // noise, except with a clearcoat, whose estimate is Cycles' own (docs/closures.md), so it is followed where
-    // the BSDF holds one (a clearcoat over metal under a constant world: 1.055 of Cycles without it).
-    bool defensive = false;
+    // The least weight with which a part is chosen for sampling (choose_defensively); 0: each by its own weight.
+    float selection_floor = 0.0f;
 
     bool has_lobes() const { return lobe_count > 0 || lambert != glm::vec3(0.0f); }
     bool directional() const { return lobe_count > 0; }  // the value depends on directions beyond Lambert's
@@ -68,14 +65,19 @@ float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
                                const glm::vec3& wi, const glm::vec3& wo);
 bool bsdf_has(const Bsdf& b, LobeSet set);  // the set has a part with weight here
-// The factor on a light's density in the MIS weights at b, for a light that Cycles picks with probability
-// `cycles_pick` (LightSources::cycles_pick_probability): that probability where b holds a clearcoat, 1 elsewhere.
-// Cycles samples its clearcoat by GGX's visible normals but reports GTR1's density for them, so what it converges
-// to there depends on its MIS weights, the light's pick included (differential seed 153: a 0.001 W lamp added far
-// away took 2.9 % off a clearcoat's highlight in Cycles). For every other part the weights change only the noise,
-// and the light's own density, every light being sampled at each point, is the better one.
-float cycles_mis_pick(const Bsdf& b, float cycles_pick);
+// Whether b holds a clearcoat (a GTR1 lobe). Cycles samples its clearcoat by GGX's visible normals but reports
+// GTR1's density for them, so what it converges to there depends on how it samples, and we follow it there:
+//   - the MIS weights take the light's density times the probability that Cycles picks that light
+//     (LightSources::cycles_pick_probability; differential seed 153: a 0.001 W lamp added far away took 2.9 % off
+//     a clearcoat's highlight in Cycles). Elsewhere the light's own density is the better one, every light being
+//     sampled at each point;
+//   - choose_defensively at the camera's first hit.
 bool bsdf_has_clearcoat(const Bsdf& b);
+// The camera's first hit (no transparency or specular part before it), where Cycles samples "defensively": each
+// closure is chosen with at least 1/8 of the closures' summed sampling weights. That changes only the noise,
+// except with a clearcoat, so b's selection_floor is set only where it holds one (a clearcoat over metal under a
+// constant world was 1.055 of Cycles without it). Call once b's parts are all there.
+void choose_defensively(Bsdf& b);
 bool is_transmission(const Lobe& lobe);
 // A part Cycles labels a diffuse reflection (Oren–Nayar, Principled diffuse, sheen, velvet), as against a microfacet
 // one: its Light Path flags and Caustics toggles go by that label.

@@ -4,7 +4,7 @@
 // At a non-specular vertex x (diffuse, or glossy rough enough to be a lobe):
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
 //     w = p_light² / (p_light² + p_bsdf²) (where x holds a clearcoat, p_light times Cycles' probability of
-//     picking that light: cycles_mis_pick); delta lights (p_light = 0 by convention) get w = 1;
+//     picking that light: bsdf_has_clearcoat); delta lights (p_light = 0 by convention) get w = 1;
 //   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns, never
 //     counted here), through the reflection parts from x's side and through the transmission parts from the
 //     other;
@@ -84,6 +84,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
                         PathCounters& counters) {
     glm::vec3 sum(0.0f);
     const bool transmits = bsdf_has(b, LobeSet::transmission);
+    const bool clearcoat = bsdf_has_clearcoat(b);  // weights take Cycles' light pick (shading.h)
     for (size_t l = 0; l < c.sources.size(); ++l) {
         if (c.sources.is_world(l) && c.sources.world().constant()) continue;  // BSDF sampling alone (below)
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
@@ -100,7 +101,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
             shadow_segment(s.position, offset_ray_origin(s.position, side, s.rounding_scale), in);
         const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
-        const float pick = cycles_mis_pick(b, c.sources.cycles_pick_probability(l));
+        const float pick = clearcoat ? c.sources.cycles_pick_probability(l) : 1.0f;
         const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf * pick, bsdf_sample_pdf(b, in.wi));
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
@@ -113,7 +114,7 @@ struct LastScatter {
     bool specular_since = false;   // and one or more specular vertices since it
     glm::vec3 x{0.0f};             // that vertex
     float pdf = 0.0f;              // its BSDF sample's density
-    bool clearcoat = false;        // it held a clearcoat: lights' densities take Cycles' pick (cycles_mis_pick)
+    bool clearcoat = false;        // it held a clearcoat: lights' densities take Cycles' pick (bsdf_has_clearcoat)
     float pick(float cycles_pick) const { return clearcoat ? cycles_pick : 1.0f; }
 };
 
@@ -181,7 +182,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             radiance += throughput * emission_at(scene, s, -ray.direction) * light_weight(last, false, light_pdf);
         }
         Bsdf b = shade(scene, s, -ray.direction);
-        b.defensive = depth == 0;  // the camera's first hit: Cycles' defensive sampling (shading.h)
+        if (depth == 0) choose_defensively(b);  // the camera's first hit (shading.h)
         if (bsdf_has(b, LobeSet::all)) {
             radiance += throughput * sample_lights(c, b, s, rng, counters);
             if (c.caustics && bsdf_has(b, LobeSet::reflection)) {
