@@ -49,19 +49,20 @@ struct LobeChoice {
 
 // A part's selection weight raised to the floor where the part is there at all.
 float at_least(float weight, bool present, float floor) { return present ? std::max(weight, floor) : weight; }
+// The same for a part of weight `part` (Lambert, mirror, refraction, transparency): by its luminance.
+float selection_weight(const glm::vec3& part, float floor) { return at_least(luminance(part), !is_zero(part), floor); }
 
 // The delta parts' summed selection weight (bsdf_sample), each raised to `floor`.
 float delta_sampling_weight(const Bsdf& b, float floor) {
-    return at_least(luminance(b.mirror), !is_zero(b.mirror), floor) +
-           at_least(luminance(b.refraction), !is_zero(b.refraction), floor) +
-           at_least(luminance(b.transparent), !is_zero(b.transparent), floor);
+    return selection_weight(b.mirror, floor) + selection_weight(b.refraction, floor) +
+           selection_weight(b.transparent, floor);
 }
 
 LobeChoice lobe_choice(const Bsdf& b, LobeSet set) {
     LobeChoice c;
     const float floor = b.selection_floor;
     c.set = set;
-    if (set != LobeSet::transmission) c.lambert = at_least(luminance(b.lambert), !is_zero(b.lambert), floor);
+    if (set != LobeSet::transmission) c.lambert = selection_weight(b.lambert, floor);
     c.total = c.lambert;
     for (int k = 0; k < b.lobe_count; ++k) {
         if (!in_set(b.lobes[k], set)) continue;
@@ -332,9 +333,8 @@ float photon_units_across(const Bsdf& b, const BsdfSample& s) {
 BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
     const float floor = b.selection_floor;
-    const float w_mirror = at_least(luminance(b.mirror), !is_zero(b.mirror), floor),
-                w_refraction = at_least(luminance(b.refraction), !is_zero(b.refraction), floor),
-                w_transparent = at_least(luminance(b.transparent), !is_zero(b.transparent), floor);
+    const float w_mirror = selection_weight(b.mirror, floor), w_refraction = selection_weight(b.refraction, floor),
+                w_transparent = selection_weight(b.transparent, floor);
     const float total = lobes.total + w_mirror + w_refraction + w_transparent;
     BsdfSample out;
     if (!(total > 0.0f) || !std::isfinite(total)) return out;

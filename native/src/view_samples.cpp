@@ -355,11 +355,9 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                     for (int k = 0; k < count; ++k) {
                         const size_t pixel = static_cast<size_t>(y) * width + x0 + k;
                         float jx = 0.5f, jy = 0.5f;
-                        if (settings.jitter) {
-                            float unused = 0.0f;
-                            SampleSequence(settings.sequence_seed, pixel, SampleSequence::kPixelStream)
-                                .point(settings.pass > 0 ? settings.pass - 1 : 0, jx, jy, unused);
-                        }
+                        if (settings.jitter)
+                            SampleSequence::pixel_point(settings.sequence_seed, pixel,
+                                                        settings.pass > 0 ? settings.pass - 1 : 0, jx, jy);
                         camera_rays[k] =
                             camera.generate_ray(static_cast<float>(x0 + k) + jx, static_cast<float>(y) + jy);
                         t_min[k] = 0.0f;

@@ -31,6 +31,13 @@ public:
         shift3_ = rng.uniform();
     }
 
+    // Where pass `index` of a render of `seed` places its camera ray in `pixel` (x, y in [0, 1)): the pixel's own
+    // sequence, as Cycles places a pixel's samples (the reference renderer and progressive passes).
+    static void pixel_point(uint64_t seed, uint64_t pixel, uint32_t index, float& x, float& y) {
+        float unused = 0.0f;
+        SampleSequence(seed, pixel, kPixelStream).point(index, x, y, unused);
+    }
+
     // The index-th point, each coordinate in [0, 1).
     void point(uint32_t index, float& u1, float& u2, float& u3) const {
         const uint32_t i = owen(index, shuffle_);

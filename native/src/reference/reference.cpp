@@ -133,9 +133,8 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
                             // Cycles places a pixel's samples: a glint covering part of a pixel (a sun in a smooth
                             // floor) converges far sooner than with independent positions (differential seed 121:
                             // its four pixels 0.81 of Cycles at 2 x 512 samples so, 0.99 along the sequence).
-                            float jx = 0.5f, jy = 0.5f, unused = 0.0f;
-                            SampleSequence(settings.seed, pixel, SampleSequence::kPixelStream)
-                                .point(static_cast<uint32_t>(pass), jx, jy, unused);
+                            float jx = 0.5f, jy = 0.5f;
+                            SampleSequence::pixel_point(settings.seed, pixel, static_cast<uint32_t>(pass), jx, jy);
                             const glm::vec3 l = trace_reference_path(context, camera.generate_ray(x + jx, y + jy), rng, local);
                             // A non-finite sample (degenerate geometry) would poison the pixel for good: drop and count it.
                             if (std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z))
