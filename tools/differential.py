@@ -598,8 +598,20 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   Tests: `test_differential.py::test_a_clearcoat_follows_cycles_light_pick` and
   `::test_a_clearcoat_over_metal_is_chosen_defensively_at_the_first_hit`.
 - **The Caustics pass now holds what Cycles' Caustics toggles remove**: light that met a glossy, mirror or
-  refracting part and then a diffuse one (`kGlossyPath`), not only light → delta+ → diffuse. The caustic energy
-  ratio compares exactly that with Cycles' on − off.
+  refracting part and then a diffuse one, not only light → delta+ → diffuse. The caustic energy ratio compares
+  exactly that with Cycles' on − off.
+- **The Caustics pass follows Cycles' labels** (a definition). Cycles drops a glossy, mirror or refracting part met
+  right after a bounce it labelled diffuse, and labels a bounce by the closure its camera path picked (with one
+  sampling weight per closure, the mean of its channels), so a Principled surface passes its light on partly as a
+  diffuse bounce and partly as a glossy one. Each photon now carries, per channel, the share of its light Cycles'
+  toggles would remove when the camera path reaches the surface storing it otherwise or diffusely (a two-state
+  chain from the light on, `photons.cpp`), and the pass splats both with the share of each sample's BRDF Cycles
+  would label diffuse or not (`LabelShare`, with the defensive weights at the first hit). It was 1.4–1.5× of
+  Cycles' excess in rooms of Principled walls (every photon that met a glossy part counted whole), 1.18–1.25× with
+  Cycles' labels in one luminance share for all channels (a red wall keeps most of its red diffusely and passes
+  much of its green and blue on by its specular part). Seed 108: 1.51 → 1.004, 44: 1.46 → 0.977, 160: 1.47 →
+  1.020. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; `test_glossy.cpp`'s
+  `CarryWhatCyclesCausticTogglesRemove` and `ScatterLabels`; `test_methods.py`'s caustics pass in every method.
 
 Fixed in the reference renderer (each with its test in `tests/python/test_reference.py`):
 
@@ -652,12 +664,6 @@ Where Cycles is not a usable oracle at these samples:
 
 Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
-- **The Caustics pass holds more than Cycles' toggles remove in rooms with Principled walls** (about 1.4× on
-  seeds 9, 44, 108 and 182, their images within 1.5 %). Cycles labels a bounce by the closure it picked (by
-  sample weight, a Fresnel closure's times its Fresnel colour) and drops a glossy closure right after a diffuse
-  label; the photons are labelled by the lobe they sampled. Labelling them as Cycles would, and counting light
-  that arrives straight from glossy parts through a view sample's diffuse parts only, moved seed 108 1.49 → 1.42,
-  44 1.43 → 1.36, 9 1.42 → 1.22 and 130 1.84 → 0.88: part of the gap, not all of it.
 - **Seed 66**: a camera path goes on through translucency; where it then meets sharp glass and the sun it adds a
   one-pixel firefly (a block 4× at 16 s, the image 1.07). That light (sun → glass → translucent surface → eye) is
   the camera path's alone, unbiased but noisy: photons would carry it better.

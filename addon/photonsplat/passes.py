@@ -3,8 +3,9 @@ render result.
 
 Names, channels and types follow Cycles where Cycles has the pass (Combined, Depth, Normal, Emit), so
 compositor setups made for Cycles work unchanged; Direct, Indirect and Caustics are Photon Splat's own split of
-the light: Combined = Emit + Direct + Indirect, and Caustics is the part of Indirect carried by photons whose
-path was light -> mirror/glass (one or more) -> diffuse surface.
+the light: Combined = Emit + Direct + Indirect, and Caustics is the part of Indirect that Cycles' Caustics
+toggles (Light Paths, reflective and refractive) would remove: light that met a glossy, mirror or refracting
+surface right after a scatter Cycles labels diffuse (by the closure its camera path picks there).
 """
 
 from dataclasses import dataclass

@@ -72,8 +72,8 @@ class PhotonSplatViewLayerSettings(bpy.types.PropertyGroup):
     )
     use_pass_caustics: BoolProperty(
         name="Caustics", default=False, update=_passes_changed,
-        description="Only the photons that met glass, a mirror or a glossy surface on their way (part of "
-                    "Indirect; what Cycles' Caustics toggles remove); costs a second splat of those photons",
+        description="The light Cycles' Caustics toggles remove: what met glass, a mirror or a glossy surface "
+                    "after a diffuse bounce (part of Indirect); costs two more splats of those photons",
     )
 
 

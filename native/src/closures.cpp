@@ -30,7 +30,8 @@ constexpr float kSingularEta = 1e-4f;
 // Cycles' clearcoat masks with GGX at a fixed α (bsdf_microfacet.h: "alpha2 = 0.0625").
 constexpr float kClearcoatMaskingAlpha = 0.25f;
 
-float luminance_of(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+// Cycles' sampling weight of a closure of this weight (closure/alloc.h): |the mean of its channels|.
+float sampling_weight_of(const glm::vec3& c) { return std::fabs((c.x + c.y + c.z) * (1.0f / 3.0f)); }
 
 float pow5(float m) {
     const float m2 = m * m;
@@ -816,10 +817,11 @@ LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo
 float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo) {
     const float cos_o = glm::dot(n, wo);
     if (!(cos_o > 0.0f) || !finite3(lobe.weight)) return 0.0f;
-    float w = luminance_of(lobe.weight);
+    float w = sampling_weight_of(lobe.weight);
     switch (lobe.kind) {
         case ClosureKind::reflection:
-            w = luminance_of(lobe.weight * fresnel_color(lobe.fresnel, lobe.specular_color, lobe.eta, cos_o));
+            // Cycles' Fresnel closures multiply theirs by the mean of their Fresnel colour at wo.
+            w *= sampling_weight_of(fresnel_color(lobe.fresnel, lobe.specular_color, lobe.eta, cos_o));
             break;
         case ClosureKind::sheen:
             // The sheen's albedo is about 0.08 (1 − cos θ_o)² (measured: 0.0056 at cos 0.7, 0.034 at 0.3, 0.083 at

@@ -202,9 +202,10 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
         budget.reserve("kernel_coverage", predict_kernel_coverage_bytes(samples) + double(samples) * sizeof(uint32_t),
                        "resolution");
     if (contains(requested_outputs(settings), FilmOutput::caustics)) {
-        // The caustic photons copied out of the map, and their own splat's light.
+        // The caustic photons copied out of the map (for one of its two splats at a time), and the two splats'
+        // light while they are summed.
         budget.reserve("caustic_photons", photon_map, "photons");
-        budget.reserve("caustic_light", predict_per_sample_light_bytes(samples), "resolution");
+        budget.reserve("caustic_light", 2.0 * predict_per_sample_light_bytes(samples), "resolution");
     }
     budget.reserve("image", predict_image_bytes(w, h, requested_outputs(settings)), "resolution");
 }
@@ -230,7 +231,10 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
         budget.reserve(after[i].first, after[i].second - before[i].second, "resolution");
     grow("indirect_light", predict_per_sample_light_bytes);
     if (settings.boundary_correction) grow("kernel_coverage", predict_kernel_coverage_bytes);
-    if (contains(requested_outputs(settings), FilmOutput::caustics)) grow("caustic_light", predict_per_sample_light_bytes);
+    if (contains(requested_outputs(settings), FilmOutput::caustics)) {
+        grow("caustic_light", predict_per_sample_light_bytes);
+        grow("caustic_light", predict_per_sample_light_bytes);
+    }
 }
 
 void check_frame_memory(const Scene& scene, const Camera& camera, const RenderSettings& settings,

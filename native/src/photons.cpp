@@ -69,14 +69,27 @@ struct CausticWeighting {
     bool aimed = false;
 };
 
-// Whether the surface reflects diffusely in part (Lambert, Oren–Nayar, Principled diffuse, sheen, velvet): what
-// Cycles labels a diffuse reflection.
-bool has_diffuse_reflection(const Bsdf& b) {
-    if (b.lambert != glm::vec3(0.0f)) return true;
-    for (int k = 0; k < b.lobe_count; ++k)
-        if (is_diffuse_reflection(b.lobes[k])) return true;
-    return false;
-}
+// What Cycles' Caustics toggles would keep of a photon's light from the surface ahead back to the light, by how
+// the camera path reaches that surface (CausticState, photons.h). Camera paths run the other way, so it is kept
+// from the light on: at each scatter, a camera path reaching it otherwise sees every part, and labels the scatter
+// diffuse with the probability q of ScatterLabel, so that it then reaches the previous surface diffusely; one
+// reaching it diffusely sees its diffuse-labelled parts only (their share r of f), and labels it diffuse:
+//   kept'[otherwise] = (1 − q)·kept[otherwise] + q·kept[diffusely],   kept'[diffusely] = r·kept[diffusely].
+// A mirror or a sharp refraction is q = r = 0, Lambert q = r = 1, transparency leaves both as they were (Cycles'
+// transparent bounces keep the path's labels). q is one for all channels, r and what is kept are per channel.
+struct CausticKept {
+    glm::vec3 kept[2] = {glm::vec3(1.0f), glm::vec3(1.0f)};
+    void scatter(float q, const glm::vec3& r) {
+        kept[kReachedOtherwise] = (1.0f - q) * kept[kReachedOtherwise] + q * kept[kReachedDiffusely];
+        kept[kReachedDiffusely] = r * kept[kReachedDiffusely];
+    }
+    void set_shares(Photon& p) const {
+        for (int state = 0; state < 2; ++state)
+            for (int c = 0; c < 3; ++c)
+                p.caustic_share[state][c] = static_cast<uint16_t>(
+                    std::lround(std::clamp(1.0f - kept[state][c], 0.0f, 1.0f) * kCausticShareUnit));
+    }
+};
 
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
@@ -88,10 +101,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
-    // Cycles' Caustics toggles drop a glossy part met right after a diffuse bounce (camera side), so light that
-    // met a glossy part counts as theirs where a diffuse part receives it: a later diffuse scatter, or a diffuse
-    // part of the surface that stores the photon (kGlossyPath). Light reaching a glossy-only surface is not.
-    bool glossy_so_far = false, glossy_then_diffuse = false;
+    CausticKept kept;
     // Until its first scatter other than transparency, what the photon reaches is direct light, which shadow rays
     // (through transparent surfaces too) already count.
     bool direct = true;
@@ -107,12 +117,12 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             // Most surfaces: stored, then a cosine-weighted bounce with roulette on the albedo (no Bsdf to build).
             if (!direct) {
                 const bool caustic = only_specular_so_far;
-                out.push_back(Photon{s.position, -ray.direction, s.geometric_normal,
-                                     caustic ? power * caustic_weight : power,
-                                     (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                         (glossy_so_far ? static_cast<uint32_t>(kGlossyPath) : 0u)});
-                glossy_then_diffuse = glossy_so_far;
+                Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
+                              caustic ? static_cast<uint32_t>(kCaustic) : 0u, {}};
+                kept.set_shares(photon);
+                out.push_back(photon);
             }
+            kept.scatter(1.0f, glm::vec3(1.0f));
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
             direct = false;
@@ -130,12 +140,11 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         if (!direct && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
-                                   ((glossy_then_diffuse || (glossy_so_far && has_diffuse_reflection(b)))
-                                        ? static_cast<uint32_t>(kGlossyPath)
-                                        : 0u);
-            out.push_back(Photon{s.position, -ray.direction, s.geometric_normal,
-                                 caustic ? power * caustic_weight : power, flags});
+                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u);
+            Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
+                          flags, {}};
+            kept.set_shares(photon);
+            out.push_back(photon);
             // An aimed photon goes on where this surface also passes light on sharply (glass with a clearcoat, a
             // mirror mixed with diffuse): every caustic photon an ordinary photon stores along its sharp chain is
             // one the balance heuristic shares with the aimed ones, so they must store it too. It stops at its
@@ -145,8 +154,12 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
         const BsdfSample step = bsdf_sample(b, u0, u1, u2);
         if (step.kind == ScatterKind::none) return;
-        if (step.kind == ScatterKind::lobes && !step.glossy) glossy_then_diffuse = glossy_then_diffuse || glossy_so_far;
-        glossy_so_far = glossy_so_far || step.glossy;
+        if (step.kind == ScatterKind::lobes) {
+            const ScatterLabel label = scatter_label(b, step.direction);
+            kept.scatter(label.diffuse_probability, label.diffuse_value);
+        } else if (step.kind != ScatterKind::transparent) {
+            kept.scatter(0.0f, glm::vec3(0.0f));  // a mirror or a sharp refraction
+        }
         if (step.kind == ScatterKind::lobes) {
             if (weighting.aimed) return;
             only_specular_so_far = false;

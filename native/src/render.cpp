@@ -79,14 +79,33 @@ std::optional<ClusterHierarchy> build_hierarchy(const Splatter& splatter, const 
     return hierarchy;
 }
 
-// The photons a caustics output splats a second time, alone, over the same view samples and hierarchy: the same
-// estimate restricted to the photons that met a glossy, mirror or refracting surface (kGlossyPath), the light
-// Cycles' Caustics toggles remove, so that the pass measures what those toggles change.
-PhotonMap caustic_photons_of(const PhotonMap& photons) {
+// The photons a caustics output splats again, over the same view samples and hierarchy, each with the share of
+// its power that Cycles' Caustics toggles remove when the camera path reaches the surface that stores it in
+// `state` (photons.h). The output is what those toggles change: the splat of kReachedOtherwise's photons with the
+// share of each sample's BRDF that Cycles would not label diffuse (its camera path then reaches the photon's
+// previous surface otherwise), plus that of kReachedDiffusely's with the diffuse-labelled share (LabelShare).
+PhotonMap caustic_photons_of(const PhotonMap& photons, CausticState state) {
     PhotonMap caustic;
     caustic.emitted = photons.emitted;
-    for (const Photon& p : photons.photons)
-        if (p.flags & kGlossyPath) caustic.photons.push_back(p);
+    for (const Photon& p : photons.photons) {
+        const glm::vec3 share = caustic_share(p, state);
+        if (share == glm::vec3(0.0f)) continue;
+        caustic.photons.push_back(p);
+        caustic.photons.back().power *= share;
+    }
+    return caustic;
+}
+
+// The Caustics output's light per view sample: the two splats above.
+SplatEstimate splat_caustics(const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
+                             SplatParams params, RenderControl& control, Stats& stats) {
+    params.label_share = LabelShare::other;
+    SplatEstimate caustic = splatter.splat(frame, caustic_photons_of(photons, kReachedOtherwise), params, control, stats);
+    params.label_share = LabelShare::diffuse;
+    const SplatEstimate diffusely =
+        splatter.splat(frame, caustic_photons_of(photons, kReachedDiffusely), params, control, stats);
+    for (size_t i = 0; i < caustic.radiance.size(); ++i) caustic.radiance[i] += diffusely.radiance[i];
+    caustic.kernel_estimate = caustic.kernel_estimate && diffusely.kernel_estimate;
     return caustic;
 }
 
@@ -259,7 +278,6 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         view_sample_sphere(samples, photon_settings.focus_center, photon_settings.focus_radius);
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
         const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
-        const PhotonMap caustic_photons = caustics_output ? caustic_photons_of(photons) : PhotonMap();
 
         // 3. The cluster hierarchy, if the method splats onto one.
         const std::optional<ClusterHierarchy> hierarchy = build_hierarchy(*splatter, samples, camera, control, stats);
@@ -278,7 +296,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
             indirect = splatter->splat(frame, photons, params, control, stats);
             if (caustics_output) {
                 control.begin_stage("caustic splat", splat_end, 0.98);
-                caustic = splatter->splat(frame, caustic_photons, params, control, stats);
+                caustic = splat_caustics(*splatter, frame, photons, params, control, stats);
             }
         }
         control.check();

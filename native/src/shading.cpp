@@ -49,8 +49,11 @@ struct LobeChoice {
 
 // A part's selection weight raised to the floor where the part is there at all.
 float at_least(float weight, bool present, float floor) { return present ? std::max(weight, floor) : weight; }
-// The same for a part of weight `part` (Lambert, mirror, refraction, transparency): by its luminance.
-float selection_weight(const glm::vec3& part, float floor) { return at_least(luminance(part), !is_zero(part), floor); }
+// The same for a part of weight `part` (Lambert, mirror, refraction, transparency): the mean of its channels, as
+// Cycles weighs its closures for sampling (closure/alloc.h).
+float selection_weight(const glm::vec3& part, float floor) {
+    return at_least(std::max(0.0f, (part.x + part.y + part.z) * (1.0f / 3.0f)), !is_zero(part), floor);
+}
 
 // The delta parts' summed selection weight (bsdf_sample), each raised to `floor`.
 float delta_sampling_weight(const Bsdf& b, float floor) {
@@ -262,6 +265,63 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
     return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
 }
 
+namespace {
+
+// A part Cycles labels diffuse when it samples from it (its Light Path flags and Caustics toggles go by it).
+bool labelled_diffuse(const Lobe& l) { return is_diffuse_reflection(l) || l.kind == ClosureKind::translucent; }
+
+// Σ w_j p_j(wi) over the parts (all, and the diffuse-labelled ones), and f(wi) likewise, for ScatterLabel and
+// LabelShare. `lambert` counts only for wi above n; lobes only on their own side (reflection or transmission).
+struct LabelSums {
+    float picked = 0.0f, picked_diffuse = 0.0f;
+    glm::vec3 f{0.0f}, f_diffuse{0.0f};
+    void add(const glm::vec3& value, float weight_times_pdf, bool diffuse) {
+        f += value;
+        picked += weight_times_pdf;
+        if (diffuse) {
+            f_diffuse += value;
+            picked_diffuse += weight_times_pdf;
+        }
+    }
+    float diffuse_probability() const { return picked > 0.0f ? picked_diffuse / picked : 0.0f; }
+};
+
+LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n, const glm::vec3& wi,
+                     const glm::vec3& wo, float floor, bool reflection_side) {
+    LabelSums sums;
+    const float cos_i = glm::dot(wi, n);
+    if (reflection_side && cos_i > 0.0f && !is_zero(lambert))
+        sums.add(lambert * kInvPi, selection_weight(lambert, floor) * cos_i * kInvPi, true);
+    for (int k = 0; k < count; ++k) {
+        if (is_transmission(lobes[k]) == reflection_side) continue;
+        const LobeValue v = lobe_eval(lobes[k], n, wi, wo);
+        float w = lobe_sampling_weight(lobes[k], n, wo);
+        w = at_least(std::isfinite(w) ? std::max(w, 0.0f) : 0.0f, !is_zero(lobes[k].weight), floor);
+        sums.add(v.f, w * v.pdf, labelled_diffuse(lobes[k]));
+    }
+    return sums;
+}
+
+}  // namespace
+
+glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
+                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor) {
+    if (share == LabelShare::whole) return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
+    const LabelSums sums = label_sums(lambert, lobes, lobe_count, n, wi, wo, selection_floor, true);
+    const float q = sums.diffuse_probability();
+    return sums.f * (share == LabelShare::diffuse ? q : 1.0f - q);
+}
+
+ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi) {
+    const LabelSums sums =
+        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, b.selection_floor, glm::dot(wi, b.ng) > 0.0f);
+    ScatterLabel label;
+    label.diffuse_probability = sums.diffuse_probability();
+    for (int c = 0; c < 3; ++c)
+        label.diffuse_value[c] = sums.f[c] > 0.0f ? std::clamp(sums.f_diffuse[c] / sums.f[c], 0.0f, 1.0f) : 0.0f;
+    return label;
+}
+
 float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set) { return choice_pdf(b, lobe_choice(b, set), wi); }
 
 bool bsdf_has(const Bsdf& b, LobeSet set) {
@@ -277,17 +337,17 @@ bool bsdf_has_clearcoat(const Bsdf& b) {
     return false;
 }
 
-void choose_defensively(Bsdf& b) {
-    b.selection_floor = 0.0f;
-    if (!bsdf_has_clearcoat(b)) return;
+float defensive_floor(const Bsdf& b) {
     // 1/8 of the parts' summed weights, as Cycles sums its closures'.
-    float sum = luminance(b.lambert) + delta_sampling_weight(b, 0.0f);
+    float sum = selection_weight(b.lambert, 0.0f) + delta_sampling_weight(b, 0.0f);
     for (int k = 0; k < b.lobe_count; ++k) {
         const float w = lobe_sampling_weight(b.lobes[k], b.n, b.wo);
         if (std::isfinite(w)) sum += std::max(w, 0.0f);
     }
-    b.selection_floor = 0.125f * sum;
+    return 0.125f * sum;
 }
+
+void choose_defensively(Bsdf& b) { b.selection_floor = bsdf_has_clearcoat(b) ? defensive_floor(b) : 0.0f; }
 
 BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2) {
     return sample_choice(b, lobe_choice(b, set), u0, u1, u2);

@@ -118,6 +118,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
         diffuse_part = diffuse_part || is_diffuse_reflection(b->lobes[k]);
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
+    if (path.depth == 0 && b != nullptr) sample.selection_floor = defensive_floor(*b);
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
     p.found.push_back(sample);

@@ -433,7 +433,7 @@ TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
     for (const Photon& p : map.photons) {
         on_floor += (std::fabs(p.position.z) < 1e-4f && p.normal.z > 0.9f) ? 1 : 0;
         EXPECT_EQ(p.flags & kCaustic, 0u) << "a glossy bounce is not specular: no caustic photons";
-        glossy_path += (p.flags & kGlossyPath) ? 1 : 0;
+        glossy_path += caustic_share(p, kReachedDiffusely) != glm::vec3(0.0f) ? 1 : 0;
         // F0 = 1 and albedo 1: the Russian roulette of both lobes keeps every power exactly the emitted one.
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.power[c], first[c], 1e-5f * first[c]);
     }
@@ -441,6 +441,78 @@ TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
     EXPECT_EQ(stats.counters.at("caustic_photons_stored"), 0.0);
     // Off the glossy floor onto the white walls: what Cycles' Caustics toggles remove (the Caustics pass).
     EXPECT_GT(glossy_path, 100u);
+}
+
+// What Cycles' Caustics toggles remove of each photon's light (photons.h), in a box whose floor is glossy alone and
+// whose walls are Lambert alone: every scatter is labelled one way for certain, so each share is 0 or 1. Light off
+// the floor straight onto a wall is removed only where Cycles' camera path reaches the wall diffusely (then the
+// floor's glossy part is dropped); light that went on from the floor to another wall, always.
+TEST(GlossyPhotons, CarryWhatCyclesCausticTogglesRemove) {
+    Scene scene;
+    build_white_box_with_glossy_floor(scene, 0.4f);
+    RenderControl control;
+    Stats stats;
+    PhotonSettings settings;
+    settings.count = 20000;
+    settings.seed = 4;
+    const PhotonMap map = trace_photons(scene, settings, control, stats);
+    size_t diffuse_only = 0, straight_from_floor = 0, beyond = 0;
+    for (const Photon& p : map.photons) {
+        const glm::vec3 otherwise = caustic_share(p, kReachedOtherwise), diffusely = caustic_share(p, kReachedDiffusely);
+        if (otherwise == glm::vec3(0.0f) && diffusely == glm::vec3(0.0f)) ++diffuse_only;
+        else if (otherwise == glm::vec3(0.0f) && diffusely == glm::vec3(1.0f)) ++straight_from_floor;
+        else if (otherwise == glm::vec3(1.0f) && diffusely == glm::vec3(1.0f)) ++beyond;
+        else ADD_FAILURE() << "shares " << otherwise.x << ", " << diffusely.x;
+    }
+    EXPECT_GT(diffuse_only, 100u);
+    EXPECT_GT(straight_from_floor, 100u);
+    EXPECT_GT(beyond, 100u);
+}
+
+// The share of a scatter Cycles labels diffuse: Σ w p over its diffuse-labelled parts over Σ w p over all, with
+// Cycles' sampling weights (the mean of a closure's channels); the diffuse parts' share of f per channel.
+TEST(ScatterLabels, FollowCyclesClosureWeightsAndDensities) {
+    const glm::vec3 n(0, 0, 1), wo = glm::normalize(glm::vec3(0.3f, 0.0f, 1.0f));
+    const glm::vec3 wi = glm::normalize(glm::vec3(-0.5f, 0.2f, 1.0f));
+    Bsdf b;
+    b.n = b.ng = n;
+    b.wo = wo;
+    b.lambert = glm::vec3(0.8f, 0.2f, 0.2f);
+    const ScatterLabel lambert = scatter_label(b, wi);
+    EXPECT_FLOAT_EQ(lambert.diffuse_probability, 1.0f);
+    EXPECT_EQ(lambert.diffuse_value, glm::vec3(1.0f));
+    Lobe ggx;
+    ggx.kind = ClosureKind::reflection;
+    ggx.distribution = Distribution::ggx;
+    ggx.weight = glm::vec3(0.3f, 0.6f, 0.9f);
+    ggx.roughness = 0.5f;
+    ggx.alpha_x = ggx.alpha_y = 0.25f;
+    b.lobes[0] = ggx;
+    b.lobe_count = 1;
+    const LobeValue g = lobe_eval(ggx, n, wi, wo);
+    ASSERT_GT(g.pdf, 0.0f);
+    const float cos_i = glm::dot(wi, n), pi = 3.14159265f;
+    const float w_lambert = 0.4f, w_ggx = 0.6f;  // the channels' means
+    const float expected = w_lambert * cos_i / pi / (w_lambert * cos_i / pi + w_ggx * g.pdf);
+    const ScatterLabel mixed = scatter_label(b, wi);
+    EXPECT_NEAR(mixed.diffuse_probability, expected, 1e-5f);
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(mixed.diffuse_value[c], b.lambert[c] / pi / (b.lambert[c] / pi + g.f[c]), 1e-5f);
+    // The view sample's shares of f (LabelShare) split it by the same probability.
+    const glm::vec3 whole = bsdf_eval_reflection(b.lambert, b.lobes, 1, n, wi, wo, LabelShare::whole, 0.0f);
+    const glm::vec3 diffuse = bsdf_eval_reflection(b.lambert, b.lobes, 1, n, wi, wo, LabelShare::diffuse, 0.0f);
+    const glm::vec3 other = bsdf_eval_reflection(b.lambert, b.lobes, 1, n, wi, wo, LabelShare::other, 0.0f);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(diffuse[c], expected * whole[c], 1e-5f * whole[c]);
+        EXPECT_NEAR(diffuse[c] + other[c], whole[c], 1e-5f * whole[c]);
+    }
+    // At the camera's first hit Cycles raises each part to 1/8 of the summed weights: a faint lobe is picked more.
+    b.lobes[0].weight = glm::vec3(0.01f);
+    const float floor = defensive_floor(b);
+    EXPECT_NEAR(floor, 0.125f * (w_lambert + 0.01f), 1e-6f);
+    const glm::vec3 plain = bsdf_eval_reflection(b.lambert, b.lobes, 1, n, wi, wo, LabelShare::other, 0.0f);
+    const glm::vec3 floored = bsdf_eval_reflection(b.lambert, b.lobes, 1, n, wi, wo, LabelShare::other, floor);
+    EXPECT_GT(floored.x, 2.0f * plain.x);
 }
 
 TEST(GlossyPhotons, NearSmoothGlossyIsAMirrorThatMakesCaustics) {
@@ -638,8 +710,8 @@ TEST(GlossyRender, SplatEvaluatesTheLobePerPhotonDirection) {
     expected /= kPi * 0.01 * 10.0;
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(out[0][c], expected[c], 1e-5 * expected[c]);
     // And the photon aligned with the mirror direction dominates a photon from straight above.
-    EXPECT_GT(luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::normalize(glm::vec3(1, 0, 1))))),
-              10.0f * luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::vec3(0, 0, 1)))));
+    EXPECT_GT(luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::normalize(glm::vec3(1, 0, 1)), LabelShare::whole))),
+              10.0f * luminance(glm::vec3(sample_brdf(s, samples.lobes.data(), glm::vec3(0, 0, 1), LabelShare::whole))));
 }
 
 // Five spheres of roughness 0.05 (a mirror) to 0.8 on a diffuse floor: everything finite and non-negative.

@@ -145,8 +145,10 @@ struct LobeSample {
 // Draws wi for wo from the lobe's own distribution (visible normals for microfacets). u1, u2 in [0, 1).
 LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, float u1, float u2);
 
-// An estimate of the lobe's albedo for wo (∫ f |cos| dwi, up to a factor of about 2), cheap: used only to choose
-// which lobe to sample, never in an estimate's value.
+// The lobe's weight in choosing which part to sample, as Cycles weighs the closure (the mean of its weight's
+// channels, a Fresnel closure's times the mean of its Fresnel colour at wo): never in an estimate's value, but
+// where Cycles' own estimate depends on its choice (a clearcoat's, the labels its Caustics toggles go by), ours
+// follows it.
 float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo);
 
 // Cycles' ensure_valid_reflection (closure/bsdf_util.h): a shading normal n (unit) tilted towards the geometric

@@ -16,11 +16,16 @@ enum PhotonFlags : uint32_t {
     kCaustic = 1u,  // path light → specular+ → this diffuse hit (L S+ D)
     kInsidePhoton = 2u,  // stored on the back face of a transmitting surface (inside glass): splats only onto view
                          // samples there too, never through the surface onto what lies close outside (splat.h)
-    // The path scattered off a glossy, mirror or refracting part (not diffuse, translucent or transparent) and then
-    // reached a diffuse part (a later diffuse bounce, or this surface's own diffuse reflection): the light that
-    // Cycles' Caustics toggles (Light Paths) remove, and the engine's Caustics pass.
-    kGlossyPath = 4u,
 };
+
+// The share of a photon's light that Cycles' Caustics toggles (Light Paths, reflective and refractive off) remove,
+// in 1/65535: the engine's Caustics output (render.cpp). The toggles drop every glossy, mirror or refracting part
+// met right after a scatter Cycles labelled diffuse, and Cycles labels a scatter by the part its camera path
+// picked to sample it (shading.h: ScatterLabel, LabelShare). So what they remove of a photon's light depends on
+// how the camera path reaches the surface that stores it: by a scatter not labelled diffuse (the camera's own ray,
+// a mirror, glass), or by one labelled diffuse (then that surface's own glossy and refracting parts go too).
+enum CausticState : int { kReachedOtherwise = 0, kReachedDiffusely = 1 };
+constexpr float kCausticShareUnit = 65535.0f;
 
 struct Photon {
     glm::vec3 position;  // world space
@@ -28,7 +33,14 @@ struct Photon {
     glm::vec3 normal;    // geometric normal at the hit, flipped so that dot(normal, wi) > 0
     glm::vec3 power;     // flux [W] carried; the estimate divides by the number of EMITTED photons
     uint32_t flags;      // PhotonFlags
+    // The share removed by the Caustics toggles, by CausticState and channel (0: none, light that met diffuse
+    // parts only).
+    uint16_t caustic_share[2][3];
 };
+inline glm::vec3 caustic_share(const Photon& p, CausticState state) {
+    const uint16_t* s = p.caustic_share[state];
+    return glm::vec3(s[0], s[1], s[2]) / kCausticShareUnit;
+}
 
 struct PhotonMap {
     std::vector<Photon> photons;  // in Morton order of position, ties by emission order: deterministic

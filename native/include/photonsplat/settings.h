@@ -43,8 +43,8 @@ struct RenderSettings {
     // The film outputs the render produces (film.h; combined always). Fewer outputs hold less memory, above all in
     // a progressive render's running sums.
     FilmOutputSet outputs = kDefaultFilmOutputs;
-    bool caustics_pass = false;       // also produce the caustics output: the photons that met a glossy, mirror or
-                                      // refracting surface (kGlossyPath: what Cycles calls caustics) splatted alone
+    bool caustics_pass = false;       // also produce the caustics output: the light Cycles' Caustics toggles remove
+                                      // (photons.h: each photon's share of it, splatted alone)
     bool transparent = false;         // film transparency: alpha 0 and no background where camera rays escape
     // Progressive rendering (progressive.h): iterations of new photons, jittered camera rays and a shrinking radius,
     // averaged. 1 = the paper's one-shot method, exactly the image of a single iteration.

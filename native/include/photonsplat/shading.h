@@ -64,7 +64,30 @@ float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
 // Only the reflection side of bsdf_eval, from a view sample's stored parts: what it receives from photons (splat.h).
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
                                const glm::vec3& wi, const glm::vec3& wo);
+// The share of f a Caustics output takes from a view sample (splat.h): all of it, or the part of its photons' light
+// that Cycles' camera paths would label diffuse at this surface (by picking a diffuse-labelled part to sample wi:
+// Lambert, Oren–Nayar, Principled diffuse, sheen, velvet, translucency), or the rest. Cycles picks a part in
+// proportion to its sampling weight w_j, draws wi from its density p_j and weighs the result by the sum of every
+// part's f over Σ w_j p_j(wi), so the diffuse-labelled share of f(wi) is Σ_diffuse w_j p_j(wi) / Σ_all w_j p_j(wi).
+// selection_floor is Cycles' defensive floor at the camera's first hit (choose_defensively; 0 elsewhere).
+enum class LabelShare : uint8_t { whole, diffuse, other };
+glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
+                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor);
 bool bsdf_has(const Bsdf& b, LobeSet set);  // the set has a part with weight here
+// How Cycles would label a photon's scatter from b (its wo, towards where the photon came from) into wi, sampled
+// among b's non-delta parts: the probability that its camera path, going the other way, labels it diffuse (the
+// share above, with the densities of the photon's own direction: for Lambert and visible-normal microfacets the
+// ratio of the two is the same but for the masking term), and the diffuse-labelled parts' share of f(wi) per
+// channel, which is what is left of the scatter where Cycles' Caustics toggles drop the other parts. (Cycles
+// weighs closures by one number each, so the label's probability is one for all channels; the share is not: a red
+// Principled wall's diffuse part keeps most of the red, its specular part much of the rest.)
+struct ScatterLabel {
+    float diffuse_probability = 1.0f;
+    glm::vec3 diffuse_value{1.0f};
+};
+ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi);
+// Cycles' defensive floor for b at the camera's first hit: 1/8 of its parts' summed sampling weights.
+float defensive_floor(const Bsdf& b);
 // Whether b holds a clearcoat (a GTR1 lobe). Cycles samples its clearcoat by GGX's visible normals but reports
 // GTR1's density for them, so what it converges to there depends on how it samples, and we follow it there:
 //   - the MIS weights take the light's density times the probability that Cycles picks that light

@@ -62,6 +62,9 @@ struct SplatParams {
     // traversed can each go past their share by the pairs of one photon; that is kept under half the cap, unless
     // one photon alone has more.) Must be >= 1; small values are for tests (they make many batches).
     uint64_t max_pairs_in_memory = kDefaultMaxPairsInMemory;
+    // The share of each sample's BRDF the photons are splatted with: the whole, except for the Caustics output's
+    // two splats (render.cpp), which weigh its photons by how Cycles would label the sample's own scatter.
+    LabelShare label_share = LabelShare::whole;
 };
 
 // Checks what every method relies on: a positive finite radius, N_emitted > 0 when photons are stored, a
@@ -93,11 +96,13 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
 
 // f_r(x, ωi, ωo): the view sample's BRDF for light arriving from ωi (towards the light), seen along s.wo.
 // albedo/π, plus for kGlossy samples their reflection lobes (shading.h); `lobes` is ViewSamples::lobes.data().
-inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi) {
+// `share`: all of it, or the share Cycles' camera paths label diffuse or not (LabelShare, for the Caustics
+// output: a Lambert-only sample is labelled diffuse whole).
+inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi, LabelShare share) {
     constexpr double inv_pi = 0.318309886183790671538;
-    if (!(s.flags & kGlossy)) return glm::dvec3(s.albedo) * inv_pi;
+    if (!(s.flags & kGlossy)) return share == LabelShare::other ? glm::dvec3(0.0) : glm::dvec3(s.albedo) * inv_pi;
     return glm::dvec3(bsdf_eval_reflection(s.albedo, lobes + s.lobe_begin, static_cast<int>(s.lobe_count),
-                                           s.shading_normal, wi, s.wo));
+                                           s.shading_normal, wi, s.wo, share, s.selection_floor));
 }
 
 // The kernel relative to the uniform one, so that finish_sample's 1/(π r²) applies to both:
@@ -112,7 +117,7 @@ inline double kernel_weight(const glm::vec3& d, const SplatParams& params) {
 // finish_sample. `p` is the photon position relative to the samples' origin.
 inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const Lobe* lobes, const glm::vec3& p,
                                         const Photon& photon, const SplatParams& params) {
-    const glm::dvec3 f = sample_brdf(s, lobes, photon.wi) * glm::dvec3(photon.power);
+    const glm::dvec3 f = sample_brdf(s, lobes, photon.wi, params.label_share) * glm::dvec3(photon.power);
     return params.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params);
 }
 

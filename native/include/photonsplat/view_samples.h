@@ -49,6 +49,9 @@ struct ViewSample {
     float rounding_scale;      // SurfacePoint::rounding_scale, for rays leaving the sample (offset_ray_origin)
     uint32_t lobe_begin;       // kGlossy samples: its other reflection lobes are ViewSamples::lobes[lobe_begin, +count)
     uint32_t lobe_count;
+    // Cycles' defensive floor of the parts' sampling weights at the camera's first hit (defensive_floor in
+    // shading.h; 0 elsewhere): how Cycles labels the scatter here, for the Caustics output (LabelShare).
+    float selection_floor;
 };
 
 struct ViewSamples {

@@ -82,7 +82,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 if (!direct && bsdf_has(b, LobeSet::all))
                     per_chunk[chunk].push_back(Photon{
                         s.position, -ray.direction, s.geometric_normal, power,
-                        kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u)});
+                        kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u), {}});
                 if (bounce == max_specular_bounces) break;
                 const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                 const BsdfSample step = bsdf_sample(b, u0, u1, u2);

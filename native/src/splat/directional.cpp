@@ -484,10 +484,10 @@ int shade_bins(const double* values, double scale, ShadeBin* out) {
     return count;
 }
 
-glm::dvec3 reflect_bins(const ViewSample& s, const Lobe* lobes, const ShadeBin* bins, int count) {
+glm::dvec3 reflect_bins(const ViewSample& s, const Lobe* lobes, const ShadeBin* bins, int count, LabelShare share) {
     glm::dvec3 sum(0.0);
     for (int b = 0; b < count; ++b)
-        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, lobes, bins[b].direction) * bins[b].flux;
+        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, lobes, bins[b].direction, share) * bins[b].flux;
     return sum;
 }
 
@@ -897,16 +897,18 @@ private:
                 evaluations += h.bins;
                 // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
                 if (diffuse && (h.mode & kSumsFaceAll)) {
-                    radiance_[i] = s.albedo * s.throughput * ((1.0f - beta) * h.own + beta * h.parent);
+                    // (sample_brdf's: a Lambert-only sample is labelled diffuse whole.)
+                    const glm::vec3 albedo = params_.label_share == LabelShare::other ? glm::vec3(0.0f) : s.albedo;
+                    radiance_[i] = albedo * s.throughput * ((1.0f - beta) * h.own + beta * h.parent);
                     continue;
                 }
                 const FacetShade& sh = shades[f];
-                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, lobes_, s.normal) * sh.own_sum
-                                                          : reflect_bins(s, lobes_, sh.own, sh.own_count);
+                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, lobes_, s.normal, params_.label_share) * sh.own_sum
+                                                          : reflect_bins(s, lobes_, sh.own, sh.own_count, params_.label_share);
                 if (sh.parent_count > 0) {
                     const glm::dvec3 from_parent = diffuse && sh.parent_faces
-                                                       ? sample_brdf(s, lobes_, s.normal) * sh.parent_sum
-                                                       : reflect_bins(s, lobes_, sh.parent, sh.parent_count);
+                                                       ? sample_brdf(s, lobes_, s.normal, params_.label_share) * sh.parent_sum
+                                                       : reflect_bins(s, lobes_, sh.parent, sh.parent_count, params_.label_share);
                     flux = (1.0 - double(beta)) * flux + double(beta) * from_parent;
                 }
                 radiance_[i] = finish_sample(s, flux, params_);
