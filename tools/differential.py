@@ -610,8 +610,9 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   Cycles' excess in rooms of Principled walls (every photon that met a glossy part counted whole), 1.18–1.25× with
   Cycles' labels in one luminance share for all channels (a red wall keeps most of its red diffusely and passes
   much of its green and blue on by its specular part). Seed 108: 1.51 → 1.004, 44: 1.46 → 0.977, 160: 1.47 →
-  1.020. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; `test_glossy.cpp`'s
-  `CarryWhatCyclesCausticTogglesRemove` and `ScatterLabels`; `test_methods.py`'s caustics pass in every method.
+  1.020. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; in `test_glossy.cpp`,
+  `GlossyPhotons.StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag` and `ScatterLabels`; `test_methods.py`'s
+  caustics pass in every method.
 
 Fixed in the reference renderer (each with its test in `tests/python/test_reference.py`):
 

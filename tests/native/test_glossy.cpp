@@ -418,6 +418,11 @@ void build_white_box_with_glossy_floor(Scene& scene, float floor_roughness) {
     scene.add_light(light);
 }
 
+// Photons go on from a rough glossy floor, and carry what Cycles' Caustics toggles remove of their light
+// (photons.h): the floor is glossy alone and the walls Lambert alone, so every scatter is labelled one way for
+// certain and each share is 0 or 1. Light off the floor straight onto a wall is removed only where Cycles' camera
+// path reaches the wall diffusely (then the floor's glossy part is dropped); light that went on from the floor to
+// another wall, always.
 TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
     Scene scene;
     build_white_box_with_glossy_floor(scene, 0.4f);
@@ -428,42 +433,21 @@ TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
     settings.seed = 4;
     const PhotonMap map = trace_photons(scene, settings, control, stats);
     ASSERT_GT(map.photons.size(), 1000u);
-    size_t on_floor = 0, glossy_path = 0;
+    size_t on_floor = 0, diffuse_only = 0, straight_from_floor = 0, beyond = 0;
     const glm::vec3 first = map.photons.front().power;
     for (const Photon& p : map.photons) {
         on_floor += (std::fabs(p.position.z) < 1e-4f && p.normal.z > 0.9f) ? 1 : 0;
         EXPECT_EQ(p.flags & kCaustic, 0u) << "a glossy bounce is not specular: no caustic photons";
-        glossy_path += caustic_share(p, kReachedDiffusely) != glm::vec3(0.0f) ? 1 : 0;
         // F0 = 1 and albedo 1: the Russian roulette of both lobes keeps every power exactly the emitted one.
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.power[c], first[c], 1e-5f * first[c]);
-    }
-    EXPECT_GT(on_floor, 100u) << "photons are stored on the glossy floor";
-    EXPECT_EQ(stats.counters.at("caustic_photons_stored"), 0.0);
-    // Off the glossy floor onto the white walls: what Cycles' Caustics toggles remove (the Caustics pass).
-    EXPECT_GT(glossy_path, 100u);
-}
-
-// What Cycles' Caustics toggles remove of each photon's light (photons.h), in a box whose floor is glossy alone and
-// whose walls are Lambert alone: every scatter is labelled one way for certain, so each share is 0 or 1. Light off
-// the floor straight onto a wall is removed only where Cycles' camera path reaches the wall diffusely (then the
-// floor's glossy part is dropped); light that went on from the floor to another wall, always.
-TEST(GlossyPhotons, CarryWhatCyclesCausticTogglesRemove) {
-    Scene scene;
-    build_white_box_with_glossy_floor(scene, 0.4f);
-    RenderControl control;
-    Stats stats;
-    PhotonSettings settings;
-    settings.count = 20000;
-    settings.seed = 4;
-    const PhotonMap map = trace_photons(scene, settings, control, stats);
-    size_t diffuse_only = 0, straight_from_floor = 0, beyond = 0;
-    for (const Photon& p : map.photons) {
         const glm::vec3 otherwise = caustic_share(p, kReachedOtherwise), diffusely = caustic_share(p, kReachedDiffusely);
         if (otherwise == glm::vec3(0.0f) && diffusely == glm::vec3(0.0f)) ++diffuse_only;
         else if (otherwise == glm::vec3(0.0f) && diffusely == glm::vec3(1.0f)) ++straight_from_floor;
         else if (otherwise == glm::vec3(1.0f) && diffusely == glm::vec3(1.0f)) ++beyond;
         else ADD_FAILURE() << "shares " << otherwise.x << ", " << diffusely.x;
     }
+    EXPECT_GT(on_floor, 100u) << "photons are stored on the glossy floor";
+    EXPECT_EQ(stats.counters.at("caustic_photons_stored"), 0.0);
     EXPECT_GT(diffuse_only, 100u);
     EXPECT_GT(straight_from_floor, 100u);
     EXPECT_GT(beyond, 100u);
