@@ -48,9 +48,13 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
         which.push_back(i);
         cdf.push_back(total += w);
     }
-    bool any_specular = false;
-    for (const Material& m : scene.materials()) any_specular = any_specular || m.is_specular();
-    if (which.empty() || !any_specular || count == 0 || scene.triangle_count() == 0) return out;
+    // Caustic paths go on through delta parts, which a surface may hold beside lobes (Principled glass with a
+    // clearcoat, a mirror mixed with diffuse): any of them calls for photons. (Only purely specular surfaces counted
+    // here once, and the path tracer still left these lights' caustics to photons: differential seed 138, a spot
+    // behind clearcoated glass, lost its caustic and 45 % of the image.)
+    bool any_delta = false;
+    for (const Material& m : scene.materials()) any_delta = any_delta || m.has_delta;
+    if (which.empty() || !any_delta || count == 0 || scene.triangle_count() == 0) return out;
     stats.counters["caustic_photons_emitted"] += static_cast<double>(count);
 
     const RayTracer& tracer = scene.ray_tracer();
