@@ -610,11 +610,18 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   Cycles' excess in rooms of Principled walls (every photon that met a glossy part counted whole), 1.18–1.25× with
   Cycles' labels in one luminance share for all channels (a red wall keeps most of its red diffusely and passes
   much of its green and blue on by its specular part). Seed 108: 1.51 → 1.004, 44: 1.46 → 0.977, 160: 1.47 →
-  1.020. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; in `test_glossy.cpp`,
+  1.020, 9: 1.42 → 1.017, 182: 1.47 → 1.032, 190: 1.98 → 0.988, 195: 1.22 → 0.996. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; in `test_glossy.cpp`,
   `GlossyPhotons.StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag` and `ScatterLabels`; `test_methods.py`'s
   caustics pass in every method.
 
 Fixed in the reference renderer (each with its test in `tests/python/test_reference.py`):
+
+- **Caustic photons were traced only where some surface was purely specular** (a missing light path). The path
+  tracer leaves point, spot and sun lights' L S+ D paths to photons; where every delta part sat beside a lobe
+  (Principled glass with a clearcoat, a mirror mixed with diffuse) no photons were traced and those caustics were
+  counted by nobody. Seed 138 (a spot behind clearcoated glass): the reference 0.553 → 1.021; 118 0.913 → 0.968
+  (what had been put down to photons gathered through its near-sharp rough glass); 89 1.005 → 1.006. Test:
+  `test_a_spot_s_caustic_is_photon_mapped` (a mirror that is also diffuse: 0.86 of path tracing before, 1.008).
 
 - **A caustic seen through rough glass was counted by nobody** (a missing light path). The reference leaves
   point-light and sun paths L S+ D to photons and gathered them at a vertex through its reflection parts only; seen
@@ -691,15 +698,8 @@ Found, not fixed yet (the reference; the second both):
   (0.962, 1.025, 1.022, the pair 0.8–1.0 % apart). Asking the pair to agree within its own noise would catch
   them. (Spots' caustics through sharp glass were such fireflies, path traced: they are photon-mapped now, as
   point lights' are; seed 4 1.033 → 1.002, 33 1.022 → 1.019.)
-- **Photons gathered through a near-sharp rough lobe lose light** (the reference). Seed 118's Principled glass
-  sphere of roughness 0.033 (α = 0.0011, a lobe, not a delta) passes the caustics of the room's spot and point
-  light, and the reference's vertices on it gather those photons through that lobe over a kernel on a curved
-  surface: with photons 0.946 of its path tracing alone at the same samples, 0.988 with the sphere hidden, and
-  unchanged from 128 to 2048 passes (not the kernel's shrinking bias). Against Cycles: path tracing alone 0.968,
-  photon-mapped point light 0.947, point and spot 0.913. Leaving light seen through such lobes to the path
-  tracer (or sending photons on through them) would fix it.
-- **Rooms of glass and Principled surfaces under spots** (seeds 118, 146 and 72: the reference 0.947, 0.937,
-  0.977, Photon Splat 0.958, 0.923, 0.977), each with sharp glass lit by a spot or a point light, where Cycles'
+- **Rooms of glass and Principled surfaces under spots** (seeds 118, 146 and 72: the reference 0.968, 0.940,
+  0.968, Photon Splat 0.957, 0.924, 0.980), each with sharp glass lit by a spot or a point light, where Cycles'
   own caustics are least converged (146: its pair 0.8 % apart at 2 × 2048 samples). Not isolated yet.
 """
 
