@@ -100,7 +100,8 @@ PhotonMap caustic_photons_of(const PhotonMap& photons, CausticState state) {
 SplatEstimate splat_caustics(const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
                              SplatParams params, RenderControl& control, Stats& stats) {
     params.label_share = LabelShare::other;
-    SplatEstimate caustic = splatter.splat(frame, caustic_photons_of(photons, kReachedOtherwise), params, control, stats);
+    SplatEstimate caustic =
+        splatter.splat(frame, caustic_photons_of(photons, kReachedOtherwise), params, control, stats);
     params.label_share = LabelShare::diffuse;
     const SplatEstimate diffusely =
         splatter.splat(frame, caustic_photons_of(photons, kReachedDiffusely), params, control, stats);

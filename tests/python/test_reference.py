@@ -196,7 +196,8 @@ def test_a_spot_s_caustic_is_photon_mapped():
     assert sharp > 1.1
     # A mirror that also reflects a little diffusely (a delta part beside a lobe, as Principled glass with a
     # clearcoat): its caustic is the photons' all the same (differential seed 138 lost it, the image 0.553 of Cycles).
-    mixed = [dict(kind="reflection", distribution="sharp", color=(0.9, 0.9, 0.9)), dict(kind="diffuse", color=(0.1,) * 3)]
+    mixed = [dict(kind="reflection", distribution="sharp", color=(0.9, 0.9, 0.9)),
+             dict(kind="diffuse", color=(0.1,) * 3)]
     both = photons_over_path_tracing(spot_scene(0.15, mixed), camera, traced_samples=4096, mapped_samples=32)
     print(f"the same with a mirror that is also diffuse: {both:.4f}")
     assert both == pytest.approx(1.0, abs=0.015)

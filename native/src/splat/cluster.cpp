@@ -646,7 +646,8 @@ private:
                 if constexpr (kCones) {
                     // The photons accepted by the leaf or its ancestors: all diffuse-only here, f = ρ/π for any ωi.
                     if (last && accepted_here)
-                        reflected_flux += sample_brdf(s, lobes_, s.normal, params_.label_share) * accepted_.weighted_power(leaf, s.position, r);
+                        reflected_flux += sample_brdf(s, lobes_, s.normal, params_.label_share) *
+                                          accepted_.weighted_power(leaf, s.position, r);
                 }
                 if (last)
                     radiance_[i] = finish_sample(s, reflected_flux, params_);

@@ -487,7 +487,8 @@ int shade_bins(const double* values, double scale, ShadeBin* out) {
 glm::dvec3 reflect_bins(const ViewSample& s, const Lobe* lobes, const ShadeBin* bins, int count, LabelShare share) {
     glm::dvec3 sum(0.0);
     for (int b = 0; b < count; ++b)
-        if (glm::dot(s.normal, bins[b].direction) > 0.0f) sum += sample_brdf(s, lobes, bins[b].direction, share) * bins[b].flux;
+        if (glm::dot(s.normal, bins[b].direction) > 0.0f)
+            sum += sample_brdf(s, lobes, bins[b].direction, share) * bins[b].flux;
     return sum;
 }
 
@@ -903,12 +904,13 @@ private:
                     continue;
                 }
                 const FacetShade& sh = shades[f];
-                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, lobes_, s.normal, params_.label_share) * sh.own_sum
-                                                          : reflect_bins(s, lobes_, sh.own, sh.own_count, params_.label_share);
+                const LabelShare share = params_.label_share;
+                glm::dvec3 flux = diffuse && sh.own_faces ? sample_brdf(s, lobes_, s.normal, share) * sh.own_sum
+                                                          : reflect_bins(s, lobes_, sh.own, sh.own_count, share);
                 if (sh.parent_count > 0) {
                     const glm::dvec3 from_parent = diffuse && sh.parent_faces
-                                                       ? sample_brdf(s, lobes_, s.normal, params_.label_share) * sh.parent_sum
-                                                       : reflect_bins(s, lobes_, sh.parent, sh.parent_count, params_.label_share);
+                                                       ? sample_brdf(s, lobes_, s.normal, share) * sh.parent_sum
+                                                       : reflect_bins(s, lobes_, sh.parent, sh.parent_count, share);
                     flux = (1.0 - double(beta)) * flux + double(beta) * from_parent;
                 }
                 radiance_[i] = finish_sample(s, flux, params_);
