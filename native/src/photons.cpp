@@ -78,12 +78,14 @@ struct CausticWeighting {
 // A mirror or a sharp refraction is q = r = 0, Lambert q = r = 1, transparency leaves both as they were (Cycles'
 // transparent bounces keep the path's labels). q is one for all channels, r and what is kept are per channel.
 struct CausticKept {
+    bool active = false;  // only a Caustics output needs them: else the shares stay 0, at no cost
     glm::vec3 kept[2] = {glm::vec3(1.0f), glm::vec3(1.0f)};
     void scatter(float q, const glm::vec3& r) {
         kept[kReachedOtherwise] = (1.0f - q) * kept[kReachedOtherwise] + q * kept[kReachedDiffusely];
         kept[kReachedDiffusely] = r * kept[kReachedDiffusely];
     }
     void set_shares(Photon& p) const {
+        if (!active) return;
         for (int state = 0; state < 2; ++state)
             for (int c = 0; c < 3; ++c)
                 p.caustic_share[state][c] = static_cast<uint16_t>(
@@ -91,22 +93,29 @@ struct CausticKept {
     }
 };
 
+// What each photon path does besides scattering: its length bound, and whether it keeps its caustic shares.
+struct PathOptions {
+    int max_bounces = 8;
+    bool caustic_shares = false;
+};
+
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
 // that surviving photons keep about the power they arrived with. Only delta parts (mirrors, sharp refraction,
 // transparency) keep a path a caustic one: light → delta+ → stored.
-void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, int max_bounces, Rng& rng,
-                std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
+void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, const PathOptions& options,
+                Rng& rng, std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
     CausticKept kept;
+    kept.active = options.caustic_shares;
     // Until its first scatter other than transparency, what the photon reaches is direct light, which shadow rays
     // (through transparent surfaces too) already count.
     bool direct = true;
     float caustic_weight = 1.0f;
-    for (int vertex = 0; vertex <= max_bounces; ++vertex) {
+    for (int vertex = 0; vertex <= options.max_bounces; ++vertex) {
         Hit hit;
         if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
@@ -155,8 +164,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         const BsdfSample step = bsdf_sample(b, u0, u1, u2);
         if (step.kind == ScatterKind::none) return;
         if (step.kind == ScatterKind::lobes) {
-            const ScatterLabel label = scatter_label(b, step.direction);
-            kept.scatter(label.diffuse_probability, label.diffuse_value);
+            if (kept.active) {
+                const ScatterLabel label = scatter_label(b, step.direction);
+                kept.scatter(label.diffuse_probability, label.diffuse_value);
+            }
         } else if (step.kind != ScatterKind::transparent) {
             kept.scatter(0.0f, glm::vec3(0.0f));  // a mirror or a sharp refraction
         }
@@ -182,7 +193,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
 
 // One photon of `source`: its emission (redistributed by the source's guide, if any), then its path.
 void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
-                      const EmissionGuide& guide, const CausticAim& aim, int max_bounces, Rng& rng,
+                      const EmissionGuide& guide, const CausticAim& aim, const PathOptions& options, Rng& rng,
                       std::vector<Photon>& out) {
     float u1 = rng.uniform(), u2 = rng.uniform();
     const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
@@ -191,16 +202,16 @@ void trace_one_photon(const Scene& scene, const LightSources& sources, size_t so
     const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
     CausticWeighting weighting;
     if (aim.active() && aim.aimed_probability(source) > 0.0f) weighting = {&aim, source, false};
-    trace_path(scene, emitted, emitted.power * (weight / source_probability), max_bounces, rng, out, weighting);
+    trace_path(scene, emitted, emitted.power * (weight / source_probability), options, rng, out, weighting);
 }
 
 // One photon aimed at a mirror or glass object (caustic_aim.h): only its caustic photon is kept.
 void trace_one_aimed_photon(const Scene& scene, const CausticAim& aim, const std::vector<float>& source_probability,
-                            int max_bounces, Rng& rng, std::vector<Photon>& out) {
+                            const PathOptions& options, Rng& rng, std::vector<Photon>& out) {
     const size_t source = aim.pick_source(rng.uniform());
     const EmissionSample emitted = aim.sample(source, rng);
     if (!(luminance(emitted.power) > 0.0f)) return;
-    trace_path(scene, emitted, emitted.power / source_probability[source], max_bounces, rng, out,
+    trace_path(scene, emitted, emitted.power / source_probability[source], options, rng, out,
                CausticWeighting{&aim, source, true});
 }
 
@@ -222,7 +233,7 @@ EmissionGuide learn_guide(const Scene& scene, const LightSources& sources, size_
             const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
             const EmissionSample emitted = sources.sample_emission(source, std::min(u1, 0.99999994f),
                                                                    std::min(u2, 0.99999994f), u3, u4, u5);
-            trace_path(scene, emitted, glm::vec3(1.0f), max_bounces, rng, stored);
+            trace_path(scene, emitted, glm::vec3(1.0f), PathOptions{max_bounces, false}, rng, stored);
         }
         double sum = 0.0;
         for (const Photon& p : stored) sum += std::max(0.0f, luminance(p.power));
@@ -281,6 +292,7 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
     map.aimed = aim.active() ? static_cast<uint64_t>(std::llround(double(settings.aimed_fraction) * double(settings.count))) : 0;
     // Ordinary photons take indices [0, count), aimed ones [count, count + aimed): each index its own stream.
     const uint64_t paths = settings.count + map.aimed;
+    const PathOptions options{settings.max_bounces, settings.caustic_shares};
     const uint64_t chunks = (paths + kChunk - 1) / kChunk;
     std::vector<std::vector<Photon>> per_chunk(chunks);
     std::atomic<bool> cancelled{false};
@@ -294,14 +306,14 @@ PhotonMap trace_photons(const Scene& scene, const PhotonSettings& settings, cons
         for (uint64_t index = chunk * kChunk; index < end; ++index) {
             Rng rng(settings.seed, RngDomain::photon, index);
             if (index >= settings.count) {
-                trace_one_aimed_photon(scene, aim, choice.probability, settings.max_bounces, rng, per_chunk[chunk]);
+                trace_one_aimed_photon(scene, aim, choice.probability, options, rng, per_chunk[chunk]);
                 continue;
             }
             const float u = rng.uniform();
             const size_t l = static_cast<size_t>(std::upper_bound(choice.cdf.begin(), choice.cdf.end(), u) - choice.cdf.begin());
             const size_t which = std::min(l, choice.cdf.size() - 1);
-            trace_one_photon(scene, sources, which, choice.probability[which], guides[which], aim,
-                             settings.max_bounces, rng, per_chunk[chunk]);
+            trace_one_photon(scene, sources, which, choice.probability[which], guides[which], aim, options, rng,
+                             per_chunk[chunk]);
         }
         control.advance(++chunks_done, chunks);
     });

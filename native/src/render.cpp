@@ -276,6 +276,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         photon_settings.seed = seed;
         photon_settings.guide = settings.guide_photons;
         photon_settings.aimed_fraction = settings.aimed_photons;
+        photon_settings.caustic_shares = contains(requested_outputs(settings), FilmOutput::caustics);
         view_sample_sphere(samples, photon_settings.focus_center, photon_settings.focus_radius);
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
         const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);

@@ -431,6 +431,7 @@ TEST(GlossyPhotons, StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag) {
     PhotonSettings settings;
     settings.count = 20000;
     settings.seed = 4;
+    settings.caustic_shares = true;
     const PhotonMap map = trace_photons(scene, settings, control, stats);
     ASSERT_GT(map.photons.size(), 1000u);
     size_t on_floor = 0, diffuse_only = 0, straight_from_floor = 0, beyond = 0;

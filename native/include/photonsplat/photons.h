@@ -55,6 +55,7 @@ struct PhotonSettings {
     uint64_t seed = 0;
     bool guide = true;        // learn where sun photons get stored, and emit them there (emission_guide.h)
     float aimed_fraction = 0.0f;  // extra photons aimed at mirrors and glass, × count (caustic_aim.h); 0 = off
+    bool caustic_shares = false;  // fill Photon::caustic_share (a Caustics output needs it); else it stays 0
     // What the camera sees (render space; radius 0: unknown): a programmed world sends half of its photons
     // through it (world.h).
     glm::vec3 focus_center{0.0f};
