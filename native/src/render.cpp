@@ -270,16 +270,16 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
 
         // 4. Photons (before the hierarchy, whose memory is reserved already, so that the splat's is known).
         control.begin_stage("photons", 0.35, 0.45);
+        const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
         photon_settings.seed = seed;
         photon_settings.guide = settings.guide_photons;
         photon_settings.aimed_fraction = settings.aimed_photons;
-        photon_settings.caustic_shares = contains(requested_outputs(settings), FilmOutput::caustics);
+        photon_settings.caustic_shares = caustics_output;
         view_sample_sphere(samples, photon_settings.focus_center, photon_settings.focus_radius);
         const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
-        const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
 
         // 3. The cluster hierarchy, if the method splats onto one.
         const std::optional<ClusterHierarchy> hierarchy = build_hierarchy(*splatter, samples, camera, control, stats);
