@@ -794,6 +794,22 @@ LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, c
     return sanitized(eval_local(lobe, frame.to_local(wi), frame.to_local(wo)));
 }
 
+float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo) {
+    if (lobe.kind != ClosureKind::reflection || lobe.distribution != Distribution::gtr1)
+        return lobe_eval(lobe, n, wi, wo).pdf;
+    Frame frame;
+    Alphas a;
+    if (!usable_directions(n, wo) || !finite3(wi) || !lobe_frame(lobe, n, frame) || !lobe_alphas(lobe, a)) return 0.0f;
+    const glm::vec3 i = frame.to_local(wi), o = frame.to_local(wo);
+    if (!(i.z > 0.0f) || !(o.z > 0.0f)) return 0.0f;
+    const glm::vec3 sum = i + o;
+    const float len2 = glm::dot(sum, sum);
+    if (!(len2 > 1e-12f)) return 0.0f;
+    // GGX's visible-normal density of h, carried to wi by the mirror's Jacobian: G1(wo) D(h) / (4 wo.z).
+    const float pdf = ggx_g1(o, a) * ggx_d(sum / std::sqrt(len2), a) / (4.0f * o.z);
+    return std::isfinite(pdf) && pdf > 0.0f ? pdf : 0.0f;
+}
+
 LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, float u1, float u2) {
     LobeSample out;
     out.direction = n;

@@ -272,12 +272,15 @@ bool labelled_diffuse(const Lobe& l) { return is_diffuse_reflection(l) || l.kind
 
 // Σ w_j p_j(wi) over the parts (all, and the diffuse-labelled ones), and f(wi) likewise, for ScatterLabel and
 // LabelShare. `lambert` counts only for wi above n; lobes only on their own side (reflection or transmission).
+// `drawn`: Σ w_j times the density part j's sampler really draws wi with, which differs from the one it reports
+// (in `picked`) only for a clearcoat.
 struct LabelSums {
-    float picked = 0.0f, picked_diffuse = 0.0f;
+    float picked = 0.0f, picked_diffuse = 0.0f, drawn = 0.0f;
     glm::vec3 f{0.0f}, f_diffuse{0.0f};
-    void add(const glm::vec3& value, float weight_times_pdf, bool diffuse) {
+    void add(const glm::vec3& value, float weight_times_pdf, bool diffuse, float weight_times_drawn_pdf) {
         f += value;
         picked += weight_times_pdf;
+        drawn += weight_times_drawn_pdf;
         if (diffuse) {
             f_diffuse += value;
             picked_diffuse += weight_times_pdf;
@@ -286,18 +289,29 @@ struct LabelSums {
     float diffuse_probability() const { return picked > 0.0f ? picked_diffuse / picked : 0.0f; }
 };
 
+// A lobe's sampling weight as Cycles picks among its closures, raised to the defensive floor.
+float part_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, float floor) {
+    const float w = lobe_sampling_weight(lobe, n, wo);
+    return at_least(std::isfinite(w) ? std::max(w, 0.0f) : 0.0f, !is_zero(lobe.weight), floor);
+}
+
 LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n, const glm::vec3& wi,
                      const glm::vec3& wo, float floor, bool reflection_side) {
     LabelSums sums;
     const float cos_i = glm::dot(wi, n);
-    if (reflection_side && cos_i > 0.0f && !is_zero(lambert))
-        sums.add(lambert * kInvPi, selection_weight(lambert, floor) * cos_i * kInvPi, true);
+    if (reflection_side && cos_i > 0.0f && !is_zero(lambert)) {
+        const float w = selection_weight(lambert, floor) * cos_i * kInvPi;
+        sums.add(lambert * kInvPi, w, true, w);
+    }
     for (int k = 0; k < count; ++k) {
         if (is_transmission(lobes[k]) == reflection_side) continue;
         const LobeValue v = lobe_eval(lobes[k], n, wi, wo);
-        float w = lobe_sampling_weight(lobes[k], n, wo);
-        w = at_least(std::isfinite(w) ? std::max(w, 0.0f) : 0.0f, !is_zero(lobes[k].weight), floor);
-        sums.add(v.f, w * v.pdf, labelled_diffuse(lobes[k]));
+        const float w = part_weight(lobes[k], n, wo, floor);
+        // A clearcoat's own sampler: its branch's where it branches (clearcoat_branches), not the splat's.
+        const float drawn = lobes[k].distribution != Distribution::gtr1 ? v.pdf
+                            : clearcoat_branches(lobes[k])         ? 0.0f
+                                                                   : lobe_sampler_pdf(lobes[k], n, wi, wo);
+        sums.add(v.f, w * v.pdf, labelled_diffuse(lobes[k]), w * drawn);
     }
     return sums;
 }
@@ -306,10 +320,50 @@ LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, con
 
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
                                const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor) {
-    if (share == LabelShare::whole) return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
+    bool clearcoat = false;
+    for (int k = 0; k < lobe_count; ++k) clearcoat = clearcoat || lobes[k].distribution == Distribution::gtr1;
+    if (share == LabelShare::whole && !clearcoat) return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
     const LabelSums sums = label_sums(lambert, lobes, lobe_count, n, wi, wo, selection_floor, true);
-    const float q = sums.diffuse_probability();
-    return sums.f * (share == LabelShare::diffuse ? q : 1.0f - q);
+    if (!(sums.picked > 0.0f)) return share == LabelShare::diffuse ? glm::vec3(0.0f) : sums.f;
+    // Cycles' camera path draws wi with density Σ w_j p_j^drawn and weighs it by f / Σ w_j p_j^reported: it converges
+    // to f Σ w p^drawn / Σ w p^reported, which is f but where a clearcoat's two densities differ (bsdf_has_clearcoat).
+    // Of that, the share it labels diffuse is f Σ_diffuse w p / Σ w p^reported.
+    switch (share) {
+        case LabelShare::whole: return sums.f * (sums.drawn / sums.picked);
+        case LabelShare::diffuse: return sums.f * (sums.picked_diffuse / sums.picked);
+        case LabelShare::other: break;
+    }
+    return sums.f * (std::max(0.0f, sums.drawn - sums.picked_diffuse) / sums.picked);
+}
+
+bool clearcoat_branches(const Lobe& lobe) {
+    return lobe.kind == ClosureKind::reflection && lobe.distribution == Distribution::gtr1 &&
+           std::max(lobe.alpha_x, lobe.alpha_y) <= 0.01f;
+}
+
+bool bsdf_has_branching_clearcoat(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (clearcoat_branches(b.lobes[k])) return true;
+    return false;
+}
+
+BsdfSample sample_clearcoat_branch(const Bsdf& b, float u1, float u2) {
+    BsdfSample out;
+    int clearcoat = -1;
+    for (int k = 0; k < b.lobe_count && clearcoat < 0; ++k)
+        if (clearcoat_branches(b.lobes[k])) clearcoat = k;
+    if (clearcoat < 0) return out;
+    const LobeSample s = lobe_sample(b.lobes[clearcoat], b.n, b.wo, u1, u2);
+    if (!(s.pdf > 0.0f) || !(glm::dot(s.direction, b.ng) > 0.0f)) return out;
+    const LabelSums sums = label_sums(b.lambert, b.lobes, b.lobe_count, b.n, s.direction, b.wo, b.selection_floor, true);
+    const float w = part_weight(b.lobes[clearcoat], b.n, b.wo, b.selection_floor);
+    const glm::vec3 weight = sums.f * (std::fabs(glm::dot(s.direction, b.n)) * w / sums.picked);
+    if (!(sums.picked > 0.0f) || !std::isfinite(weight.x + weight.y + weight.z) || is_zero(weight)) return out;
+    out.kind = ScatterKind::lobes;
+    out.glossy = true;
+    out.direction = s.direction;
+    out.weight = glm::max(weight, glm::vec3(0.0f));
+    return out;
 }
 
 ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi) {

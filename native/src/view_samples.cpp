@@ -225,7 +225,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         }
         const bool can_continue = path.depth < p.settings.max_specular_depth;
         // Paths that go on from this vertex, the first of which continues this loop.
-        CameraPath next[4];
+        CameraPath next[5];
         int next_count = 0;
         // `same_ray`: transparency, which lets the ray go on as it was (its MIS state, camera-ness and labels
         // kept). `diffuse`: the scatter is one Cycles labels diffuse (translucency).
@@ -273,6 +273,18 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             const BsdfSample bs = bsdf_sample_set(b, LobeSet::transmission, u0, u1, u2);
             if (bs.kind == ScatterKind::lobes)
                 go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true, false, !bs.glossy);
+        }
+        if (take[0] && bsdf_has_branching_clearcoat(b)) {
+            // A sharp clearcoat's mirror-like part, as Cycles finds it (shading.h: clearcoat_branches). Its
+            // weight is small (a few % but at grazing angles), so the branch is taken with that probability
+            // (Russian roulette): a room of clearcoated walls would otherwise trace every pixel's chain of
+            // reflections to the depth limit. The lights it would meet are the view sample's direct light's
+            // (its BSDF directions draw the clearcoat too), hence a lobe's branch.
+            const float u1 = p.rng.uniform(), u2 = p.rng.uniform(), u_keep = p.rng.uniform();
+            const BsdfSample cc = sample_clearcoat_branch(b, u1, u2);
+            const float keep = std::min(1.0f, std::max({cc.weight.x, cc.weight.y, cc.weight.z}));
+            if (cc.kind == ScatterKind::lobes && u_keep < keep)
+                go_on(cc.direction, cc.weight / (keep * probability[0]), false, true);
         }
         if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false);
         if (next_count == 0) return;

@@ -136,6 +136,9 @@ struct LobeValue {
     float pdf = 0.0f;
 };
 LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
+// The density with which lobe_sample really draws wi: lobe_eval's pdf, except for the clearcoat, whose sampler (GGX
+// visible normals of its α) is not the density it reports (GTR1's), as in Cycles.
+float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
 
 struct LobeSample {
     glm::vec3 direction{0.0f};  // wi, unit
