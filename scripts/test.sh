@@ -15,7 +15,7 @@ trap 'rm -rf "$scratch"' EXIT
 status=0
 
 echo "== native tests (ctest)"
-ctest --test-dir "$root/build" --output-on-failure --timeout 300 || status=1
+ctest --test-dir "$root/build" --output-on-failure --timeout 300 --parallel "$(nproc)" || status=1
 
 echo "== Python API tests (pytest)"
 (cd "$root" && /usr/bin/python3 -m pytest -q -p no:cacheprovider tests/python) || status=1
