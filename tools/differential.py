@@ -532,6 +532,17 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   samples the clearcoat with GGX visible normals but reports the GTR1 density, so its estimate of a small light's
   highlight is brighter than GTR1's; the engine and the reference sampled GTR1 exactly and both showed 0.71 of
   Cycles' highlight block on seed 9. The clearcoat is now sampled as Cycles samples it (docs/closures.md): 0.95.
+- **A clearcoat's reflection of the room was brighter than Cycles'** (a sampling convention of Cycles, in the
+  engine only). Cycles draws a clearcoat's directions by GGX's visible normals and weighs them by GTR1's density:
+  the sharp clearcoat (Clearcoat Roughness 0.03) reflects as a mirror with its whole Fresnel weight, and GTR1's
+  reported density takes light from the other parts near the mirror direction. The engine splatted the clearcoat's
+  own f. A view sample now takes what Cycles finds by picking its other parts, and the clearcoat's own draws are a
+  camera branch (docs/closures.md). One clearcoated wall in a room of diffuse walls: 1.011 → 0.997
+  (`test_a_clearcoated_wall_reflects_the_room_as_cycles_finds_it`). The 27 scenes with a clearcoat: 89 1.019 →
+  1.000, 99 1.019 → 0.992, 102 1.013 → 0.990, 24 1.008 → 0.988, 184 1.001 → 0.983. What the clearcoat adds to
+  the image is now Cycles': seed 24 +0.85 % against Cycles' +1.04 % (+2.7 % before), 184 +2.8 % against +3.3 %
+  (+4.6 %); without their clearcoats 24 and 184 are 0.992 and 0.989 of Cycles, a bias of their own (Principled
+  walls with sheen, a sharp specular and glass), which the clearcoat's excess had hidden.
 - **A surface that both transmits and reflects was estimated as if it were not there** (kernel bias near
   geometry). The boundary correction divides a kernel estimate by the part of the kernel's ball that holds
   photon-receiving surface, found by probe rays that pass through glass and translucency (the photons they pass on

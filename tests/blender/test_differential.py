@@ -213,3 +213,69 @@ def test_a_clearcoat_over_metal_is_chosen_defensively_at_the_first_hit(scenes, c
     print(f"\nCycles {cycles:.5f}, reference {reference / cycles:.4f} of it, Photon Splat {photonsplat / cycles:.4f}")
     assert reference / cycles == pytest.approx(1.0, abs=0.01)
     assert photonsplat / cycles == pytest.approx(1.0, abs=0.01)
+
+
+def clearcoated_wall_room(core, clearcoat, samples, iterations):
+    """A 4 m room of Principled walls (diffuse only: Specular 0, Roughness 0.5) under a point light of radius 0.1,
+    at 48 x 48, one wall (the one the camera faces) with a Clearcoat of `clearcoat` at its default roughness (0.03).
+    Returns the image means of Cycles (`samples`, one seed) and Photon Splat (`iterations` passes)."""
+    from closure_gallery import render_exr, use_cycles_oracle
+    from photonsplat import export
+    bpy.ops.wm.read_homefile(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.resolution_x = scene.render.resolution_y = 48
+    scene.render.resolution_percentage = 100
+    bpy.ops.mesh.primitive_cube_add(size=4)
+    room = bpy.context.object
+    import bmesh
+    mesh = bmesh.new()
+    mesh.from_mesh(room.data)
+    bmesh.ops.reverse_faces(mesh, faces=list(mesh.faces))  # facing in
+    mesh.to_mesh(room.data)
+    mesh.free()
+    materials = []
+    for coat in (0.0, clearcoat):
+        material = bpy.data.materials.new(f"walls_{coat}")
+        material.use_nodes = True
+        principled = material.node_tree.nodes['Principled BSDF']
+        principled.inputs['Base Color'].default_value = (0.6, 0.48, 0.3, 1.0)
+        principled.inputs['Roughness'].default_value = 0.5
+        principled.inputs['Specular'].default_value = 0.0
+        principled.inputs['Clearcoat'].default_value = coat
+        room.data.materials.append(material)
+        materials.append(material)
+    for polygon in room.data.polygons:
+        polygon.material_index = 1 if polygon.normal.y < -0.9 else 0
+    lamp = bpy.data.lights.new('Lamp', 'POINT')
+    lamp.energy, lamp.shadow_soft_size = 300.0, 0.1
+    lamp_object = bpy.data.objects.new('Lamp', lamp)
+    lamp_object.location = (-1.0, 0.5, 1.2)
+    scene.collection.objects.link(lamp_object)
+    camera = bpy.data.objects.new('Camera', bpy.data.cameras.new('Camera'))
+    camera.location, camera.rotation_euler = (1.6, -1.6, 0.5), (1.45, 0.0, 0.6)
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    scene.world = bpy.data.worlds.new('Black')
+    scene.world.color = (0.0, 0.0, 0.0)
+    use_cycles_oracle(scene, samples, 1, 2)
+    cycles = render_exr(scene, REPO / "build" / "clearcoated_wall_room.exr")[..., :3].mean()
+    scene.render.engine = 'PHOTONSPLAT'
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    settings = frame.settings
+    settings.iterations, settings.max_bounces, settings.threads, settings.seed = iterations, 16, 2, 1
+    progressive = core.Progressive(frame.scene, frame.camera, settings)
+    for _ in range(iterations):
+        progressive.step()
+    return cycles, np.asarray(progressive.image())[..., :3].mean()
+
+
+def test_a_clearcoated_wall_reflects_the_room_as_cycles_finds_it(core):
+    """Cycles samples a clearcoat by GGX's visible normals of its alpha (0.0009 at the default roughness) and weighs
+    the draw by GTR1's density, so a sharp clearcoat reflects the room as a mirror with its whole Fresnel weight, and
+    GTR1's reported density takes light from the other parts near the mirror direction (docs/closures.md). Photon
+    Splat splatted the clearcoat's own f: the wall came out 1.7-2.1 % brighter than Cycles, the image 1.011 (issue
+    18: rooms of clearcoated walls, seeds 24, 89, 99, 102 and 184, 0.8-1.9 % brighter; without their clearcoats
+    the same scenes are 0.8-1.1 % darker than Cycles, for reasons of their own). Measured since: 0.997."""
+    cycles, photonsplat = clearcoated_wall_room(core, 1.0, 256, 64)
+    print(f"\nCycles {cycles:.5f}, Photon Splat {photonsplat / cycles:.4f} of it")
+    assert photonsplat / cycles == pytest.approx(1.0, abs=0.006)
