@@ -355,10 +355,12 @@ BsdfSample sample_clearcoat_branch(const Bsdf& b, float u1, float u2) {
     if (clearcoat < 0) return out;
     const LobeSample s = lobe_sample(b.lobes[clearcoat], b.n, b.wo, u1, u2);
     if (!(s.pdf > 0.0f) || !(glm::dot(s.direction, b.ng) > 0.0f)) return out;
-    const LabelSums sums = label_sums(b.lambert, b.lobes, b.lobe_count, b.n, s.direction, b.wo, b.selection_floor, true);
+    const LabelSums sums =
+        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, s.direction, b.wo, b.selection_floor, true);
+    if (!(sums.picked > 0.0f)) return out;
     const float w = part_weight(b.lobes[clearcoat], b.n, b.wo, b.selection_floor);
     const glm::vec3 weight = sums.f * (std::fabs(glm::dot(s.direction, b.n)) * w / sums.picked);
-    if (!(sums.picked > 0.0f) || !std::isfinite(weight.x + weight.y + weight.z) || is_zero(weight)) return out;
+    if (!std::isfinite(weight.x + weight.y + weight.z) || is_zero(weight)) return out;
     out.kind = ScatterKind::lobes;
     out.glossy = true;
     out.direction = s.direction;

@@ -102,8 +102,8 @@ bool bsdf_has_clearcoat(const Bsdf& b);
 // half of that into a wide tail. Photons cannot resolve a lobe that narrow, so the camera path follows that part
 // as a branch of its own (view_samples.cpp), with sample_clearcoat_branch's direction and weight, and a view
 // sample's splat (bsdf_eval_reflection) takes what Cycles finds by picking its other parts:
-// f Σ_{j≠clearcoat} w_j p_j / Σ_j w_j p_j. Without it a room of clearcoated walls came out 2.3 % brighter than
-// Cycles (differential seeds 99, 102). A rougher clearcoat stays in the splat, with its own sampler's density.
+// f Σ_{j≠clearcoat} w_j p_j / Σ_j w_j p_j. Without it rooms of clearcoated walls came out 1–2 % brighter than
+// Cycles (differential seeds 89, 99, 102). A rougher clearcoat stays in the splat, with its own sampler's density.
 bool clearcoat_branches(const Lobe& lobe);
 bool bsdf_has_branching_clearcoat(const Bsdf& b);
 // The camera's first hit (no transparency or specular part before it), where Cycles samples "defensively": each
