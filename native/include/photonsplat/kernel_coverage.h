@@ -27,9 +27,9 @@ constexpr float kMinCoverage = 0.25f;
 // tested by a ray along −n through the kernel's ball: the first non-specular surface it meets counts if it
 // faces within the splat's normal tolerance of the sample's normal, with the area it stands for (over the
 // cosine of its tilt) and the kernel's weight at its distance. Mirrors and glass are passed through (photons
-// land on what lies behind them). Glossy samples (kGlossy) keep coverage 1 (kernel_coverage.cpp says why). One
-// probe pattern, drawn from (seed, kernel_coverage), serves every sample. Multi-threaded, deterministic for a
-// seed.
+// land on what lies behind them). Glossy parts keep their estimate: a sample's coverage c is taken as
+// 1 − (1 − c) d, d its diffuse-like share (kernel_coverage.cpp says why). One probe pattern, drawn from (seed,
+// kernel_coverage), serves every sample. Multi-threaded, deterministic for a seed.
 std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& samples, const SplatParams& params,
                                    uint64_t seed, const RenderControl& control, Stats& stats);
 
