@@ -183,8 +183,9 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // Oren–Nayar or Principled walls, whose parts are all diffuse-like, lost light at its corners (differential
     // seed 184's walls alone: 0.9965 of Cycles, 0.9999 as Lambert walls). The coverage of a sample with diffuse
     // share d is 1 − (1 − c) d, set once the grid's raw coverages have been blended.
-    std::vector<float> share(count);
-    for (size_t i = 0; i < count; ++i) share[i] = diffuse_share(samples.samples[i], samples.lobes);
+    std::vector<float> share(count, 0.0f);
+    bool done =
+        for_each_sample(count, control, [&](size_t i) { share[i] = diffuse_share(samples.samples[i], samples.lobes); });
     const auto probed = [&](size_t i) { return share[i] > 0.0f; };
     // The coverage changes over the kernel's width, many pixels wide: only the pixels of a grid (every
     // kGridStep-th column and row) are probed, and the others take the bilinear blend of the four grid pixels
@@ -201,7 +202,7 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
         return first_sample[s.pixel] != i || ((s.pixel % width) % step == 0 && (s.pixel / width) % step == 0);
     };
     std::atomic<uint64_t> probes{0};
-    bool done = for_each_sample(count, control, [&](size_t i) {
+    done = done && for_each_sample(count, control, [&](size_t i) {
         if (!probed(i) || !on_grid(i)) return;
         coverage[i] = sample_coverage(scene, samples.samples[i], samples.origin, params, pattern);
         probes.fetch_add(kCoverageProbes, std::memory_order_relaxed);
@@ -229,9 +230,10 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
             probes.fetch_add(kCoverageProbes, std::memory_order_relaxed);
         }
     });
-    if (!done) control.check();
-    for (size_t i = 0; i < count; ++i)
+    done = done && for_each_sample(count, control, [&](size_t i) {
         if (share[i] < 1.0f) coverage[i] = 1.0f - (1.0f - coverage[i]) * share[i];
+    });
+    if (!done) control.check();
     stats.counters["coverage_probes"] += static_cast<double>(probes.load());
     return coverage;
 }
