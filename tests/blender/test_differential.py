@@ -233,7 +233,6 @@ def clearcoated_wall_room(core, clearcoat, samples, iterations):
     bmesh.ops.reverse_faces(mesh, faces=list(mesh.faces))  # facing in
     mesh.to_mesh(room.data)
     mesh.free()
-    materials = []
     for coat in (0.0, clearcoat):
         material = bpy.data.materials.new(f"walls_{coat}")
         material.use_nodes = True
@@ -243,7 +242,6 @@ def clearcoated_wall_room(core, clearcoat, samples, iterations):
         principled.inputs['Specular'].default_value = 0.0
         principled.inputs['Clearcoat'].default_value = coat
         room.data.materials.append(material)
-        materials.append(material)
     for polygon in room.data.polygons:
         polygon.material_index = 1 if polygon.normal.y < -0.9 else 0
     lamp = bpy.data.lights.new('Lamp', 'POINT')
