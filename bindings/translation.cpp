@@ -132,6 +132,22 @@ void bind_translation(py::module_& m) {
                       "True: add_mesh_data starts building the mesh's BVH on a thread of the scene's own (the GIL "
                       "not needed) and returns, so that the caller prepares the next mesh meanwhile; the render "
                       "takes the BVHs built. The same BVHs and images either way. Default False: no thread.")
+        .def_property(
+            "multiscatter_light_estimate",
+            [](const ps::Scene& s) {
+                return std::string(s.multiscatter_light_estimate() == ps::MultiScatterEstimate::walk ? "walk"
+                                                                                                   : "light_sample");
+            },
+            [](ps::Scene& s, const std::string& name) {
+                if (name != "walk" && name != "light_sample")
+                    throw ps::InvalidInput("Scene.multiscatter_light_estimate",
+                                           "must be 'light_sample' or 'walk', got '" + name + "'");
+                s.set_multiscatter_light_estimate(name == "walk" ? ps::MultiScatterEstimate::walk
+                                                                 : ps::MultiScatterEstimate::light_sample);
+            },
+            "How light samples evaluate a Multiscatter GGX lobe: 'light_sample' (the default) as Cycles 3.x, whose "
+            "evaluation towards a light tints each bounce after the first twice; 'walk' as its sampled directions "
+            "(and Cycles 4.x) do, once.")
         .def(
             "add_mesh_data",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,

@@ -118,6 +118,12 @@ CYCLES_4_LIGHTS = VERSION >= (4, 0, 0)
 SPOT_COSINE = not CYCLES_4_LIGHTS
 
 
+# Cycles 3.x evaluates a Multiscatter GGX lobe towards a light sample by a random walk that tints each bounce after
+# the first twice (its sampled directions once); 4.x's Multiscatter GGX is the same lobe both ways. The core's
+# Scene.multiscatter_light_estimate.
+MULTISCATTER_LIGHT_ESTIMATE = "walk" if VERSION >= (4, 0, 0) else "light_sample"
+
+
 def light_color_power(light):
     """(r, g, b) colour × power as Cycles multiplies them (W; W/m² for a sun), before any unit conversion."""
     power = float(light.energy)

@@ -311,7 +311,7 @@ struct MultiScatter {
     glm::vec3 f{0.0f};
     float probability = 0.0f;  // of sampling the compensation lobe (cosine) instead of visible normals
 };
-MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i) {
+MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i, MultiScatterEstimate estimate) {
     const GgxAlbedoTable& table = ggx_albedo_table();
     const float alpha = table_alpha(a);
     const float e_o = table.albedo(mu_o, alpha);
@@ -335,12 +335,19 @@ MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i) {
             1.0f - kMultiTintSlope * alpha *
                        (multi_tint_profile(mu_o) + multi_tint_profile(mu_i) - table.profile_mean(alpha)),
             0.02f, 1.0f);
-        const glm::vec3 tint = glm::clamp(lobe.specular_color, 0.0f, 1.0f);
+        glm::vec3 tint = glm::clamp(lobe.specular_color, 0.0f, 1.0f);
+        // Cycles' evaluation towards a light sample (mf_eval) multiplies each extra bounce by the colour twice
+        // (the walk's throughput enters both its phase and its sum): a tint² per bounce.
+        if (estimate == MultiScatterEstimate::light_sample) tint *= tint;
         fms = tint * q / (glm::vec3(1.0f) - tint * (1.0f - q));
     } else {
         // Kulla & Conty's Fresnel factor: the energy kept through all the bounces with the average Fresnel F_avg.
+        // The walk keeps F_1 ... F_(k+1) after k extra bounces: Σ F_avg^(k+1) E_avg (1 − E_avg)^(k−1).
         const glm::vec3 f_avg = fresnel_average(lobe.fresnel, lobe.specular_color, lobe.eta);
-        fms = f_avg * f_avg * e_avg / (glm::vec3(1.0f) - f_avg * (1.0f - e_avg));
+        // Towards a light sample, Cycles' mf_eval keeps the square of the first k of them instead, (F_1 ... F_k)²:
+        // the same for k = 1 (most of the light), F_avg² per bounce after it.
+        const glm::vec3 per_bounce = estimate == MultiScatterEstimate::light_sample ? f_avg * f_avg : f_avg;
+        fms = f_avg * f_avg * e_avg / (glm::vec3(1.0f) - per_bounce * (1.0f - e_avg));
     }
     out.f = lobe.weight * fms * base;
     return out;
@@ -350,7 +357,8 @@ MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i) {
 
 LobeValue zero_value() { return LobeValue{}; }
 
-LobeValue eval_reflection(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo) {
+LobeValue eval_reflection(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo,
+                          MultiScatterEstimate estimate) {
     if (!(wi.z > 0.0f) || !(wo.z > 0.0f)) return zero_value();
     const glm::vec3 sum = wi + wo;
     const float len2 = glm::dot(sum, sum);
@@ -392,7 +400,7 @@ LobeValue eval_reflection(const Lobe& lobe, Alphas a, const glm::vec3& wi, const
     out.f = lobe.weight * fresnel * (d * g / (4.0f * wi.z * wo.z));
     out.pdf = pdf;
     if (lobe.distribution == Distribution::multi_ggx) {
-        const MultiScatter ms = multi_scatter(lobe, a, wo.z, wi.z);
+        const MultiScatter ms = multi_scatter(lobe, a, wo.z, wi.z, estimate);
         out.f += ms.f;
         out.pdf = (1.0f - ms.probability) * pdf + ms.probability * wi.z * kInvPi;
     }
@@ -474,7 +482,8 @@ float sheen_value(const glm::vec3& wi, const glm::vec3& wo) {
 
 float velvet_sigma(float roughness) { return std::max(roughness, 0.01f); }  // Cycles' velvet setup
 
-LobeValue eval_local(const Lobe& lobe, const glm::vec3& wi, const glm::vec3& wo) {
+LobeValue eval_local(const Lobe& lobe, const glm::vec3& wi, const glm::vec3& wo,
+                     MultiScatterEstimate estimate = MultiScatterEstimate::walk) {
     if (!(wo.z > 0.0f)) return zero_value();
     LobeValue out;
     switch (lobe.kind) {
@@ -506,7 +515,7 @@ LobeValue eval_local(const Lobe& lobe, const glm::vec3& wi, const glm::vec3& wo)
         case ClosureKind::reflection: {
             Alphas a;
             if (lobe.distribution == Distribution::sharp || !lobe_alphas(lobe, a)) return zero_value();
-            return eval_reflection(lobe, a, wi, wo);
+            return eval_reflection(lobe, a, wi, wo, estimate);
         }
         case ClosureKind::refraction: {
             Alphas a;
@@ -545,7 +554,7 @@ bool sample_local(const Lobe& lobe, const glm::vec3& wo, float u1, float u2, glm
                 case Distribution::beckmann: h = sample_beckmann_normal(a, u1, u2); break;
                 case Distribution::gtr1: h = sample_ggx_visible_normal(wo, a, u1, u2); break;  // as Cycles
                 case Distribution::multi_ggx: {
-                    const float p_ms = multi_scatter(lobe, a, wo.z, 0.0f).probability;
+                    const float p_ms = multi_scatter(lobe, a, wo.z, 0.0f, MultiScatterEstimate::walk).probability;
                     if (u1 < p_ms) {
                         wi = cosine_hemisphere_local(std::min(u1 / p_ms, 0.99999994f), u2);
                         return true;
@@ -787,11 +796,12 @@ glm::vec3 sharp_reflection_fresnel(FresnelKind fresnel, const glm::vec3& specula
 
 // ---- Lobes -------------------------------------------------------------------------------------------------------
 
-LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo) {
+LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo,
+                    MultiScatterEstimate estimate) {
     if (!usable_directions(n, wo) || !finite3(wi)) return LobeValue{};
     Frame frame;
     if (!lobe_frame(lobe, n, frame)) return LobeValue{};
-    return sanitized(eval_local(lobe, frame.to_local(wi), frame.to_local(wo)));
+    return sanitized(eval_local(lobe, frame.to_local(wi), frame.to_local(wo), estimate));
 }
 
 float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo) {

@@ -201,7 +201,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             // programmed world is sampled by its map: the whole BSDF, weighted against the BSDF's directions.
             const bool world = sources.is_world(l) && world_constant;
             const bool weighted = (mis || sources.is_world(l)) && !world;
-            const glm::vec3 f = weighted ? bsdf_eval(b, in.wi, set)
+            const glm::vec3 f = weighted ? bsdf_eval(b, in.wi, set, scene.multiscatter_light_estimate())
                                          : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
             if (is_black(f)) continue;
             ++rays;

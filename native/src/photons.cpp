@@ -145,7 +145,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
             ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
             continue;
         }
-        const Bsdf b = shade(scene, s, -ray.direction);
+        Bsdf b = shade(scene, s, -ray.direction);
+        // Light that leaves its lamp's first surface is what Cycles finds there by sampling the lamp: a Multiscatter
+        // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h).
+        if (direct) b.sampled_estimate = scene.multiscatter_light_estimate();
         if (!direct && bsdf_has(b, LobeSet::reflection)) {
             const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |

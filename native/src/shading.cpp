@@ -26,10 +26,11 @@ bool is_zero(const glm::vec3& v) { return v.x <= 0.0f && v.y <= 0.0f && v.z <= 0
 
 // Reflection-side f of the Lambert sum and the lobes; wi on wo's side of the geometric normal.
 glm::vec3 reflection_value(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n,
-                           const glm::vec3& wi, const glm::vec3& wo) {
+                           const glm::vec3& wi, const glm::vec3& wo,
+                           MultiScatterEstimate estimate = MultiScatterEstimate::walk) {
     glm::vec3 f = glm::dot(wi, n) > 0.0f ? lambert * kInvPi : glm::vec3(0.0f);
     for (int k = 0; k < count; ++k)
-        if (!is_transmission(lobes[k])) f += lobe_eval(lobes[k], n, wi, wo).f;
+        if (!is_transmission(lobes[k])) f += lobe_eval(lobes[k], n, wi, wo, estimate).f;
     return f;
 }
 
@@ -116,7 +117,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
     if (!picked) return out;
     const float pdf = choice_pdf(b, c, wi);
     if (!(pdf > 0.0f) || !std::isfinite(pdf)) return out;
-    const glm::vec3 f = bsdf_eval(b, wi, c.set);
+    const glm::vec3 f = bsdf_eval(b, wi, c.set, b.sampled_estimate);
     const glm::vec3 weight = f * (std::fabs(glm::dot(wi, b.n)) / pdf);
     if (is_zero(weight) || !std::isfinite(weight.x + weight.y + weight.z)) return out;
     out.kind = ScatterKind::lobes;
@@ -249,11 +250,11 @@ bool is_diffuse_reflection(const Lobe& l) {
            l.kind == ClosureKind::velvet;
 }
 
-glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set) {
+glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate) {
     const bool above = glm::dot(wi, b.ng) > 0.0f;
     if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
     if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
-    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo);
+    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
     glm::vec3 f(0.0f);
     for (int k = 0; k < b.lobe_count; ++k)
         if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo).f;

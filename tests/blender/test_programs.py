@@ -434,6 +434,27 @@ def test_programmed_roughness_keeps_a_microfacet_lobe(empty_scene, op_table):
     assert {"closure_alpha_x", "closure_alpha_y"} <= targets
 
 
+def test_a_multiscatter_glossy_with_a_computed_colour_programs_its_bounces_tint(empty_scene, op_table):
+    mat = bpy.data.materials.new("Multiscatter")
+    enable_nodes(mat)
+    tree = mat.node_tree
+    tree.nodes.clear()
+    glossy = tree.nodes.new("ShaderNodeBsdfGlossy")
+    glossy.distribution = 'MULTI_GGX'
+    glossy.inputs["Roughness"].default_value = 0.7
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(glossy.outputs[0], output.inputs["Surface"])
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    tree.links.new(noise.outputs["Color"], glossy.inputs["Color"])
+    spec, program, code = program_of(mat, op_table)
+    (d,) = spec.core_arguments()["closures"]
+    assert d["distribution"] == "multi_ggx"
+    # The tint of the walk's extra bounces is the colour the program computes (clamped to [0, 1]): without it the
+    # core's lobe scatters once only.
+    targets = {o["target"] for o in program["outputs"]}
+    assert {"closure_color", "closure_specular_color"} <= targets
+
+
 def test_glass_with_a_computed_ior_splits_by_a_fresnel_op(empty_scene, op_table):
     mat = bpy.data.materials.new("Glass")
     enable_nodes(mat)

@@ -204,7 +204,7 @@ class MaterialSpec:
                          alpha_y=_placeholder(c.alpha_y, 0.25), ior=_placeholder(c.ior, 1.45))
             if c.kind == "reflection":
                 d["fresnel"] = c.fresnel
-                if c.fresnel in ("principled", "schlick"):
+                if _reads_specular_color(c):
                     d["specular_color"] = _placeholder(c.specular_color, (0.5, 0.5, 0.5))
             if c.kind in ("diffuse", "principled_diffuse", "velvet"):
                 d["roughness"] = _placeholder(c.roughness, 0.5)
@@ -282,12 +282,19 @@ def _placeholder(value, default):
     return tuple(float(c) for c in value) if isinstance(value, tuple) else float(value)
 
 
+def _reads_specular_color(c):
+    """Whether the core reads the closure's specular colour: the Fresnel's colour at normal incidence, or for a
+    Multiscatter GGX without Fresnel (Glossy) the tint of its bounces after the first, without which the core's
+    lobe has no multiple scattering at all."""
+    return c.kind == "reflection" and (c.fresnel in ("principled", "schlick") or c.distribution == "multi_ggx")
+
+
 def _closure_targets(c):
     """(program target, Value) of the inputs of closure `c` that the core reads."""
     targets = [("closure_color", c.color)]
     if c.kind in ("reflection", "refraction"):
         targets += [("closure_alpha_x", c.alpha_x), ("closure_alpha_y", c.alpha_y), ("closure_ior", c.ior)]
-    if c.kind == "reflection" and c.fresnel in ("principled", "schlick"):
+    if _reads_specular_color(c):
         targets.append(("closure_specular_color", c.specular_color))
     if c.kind in ("diffuse", "principled_diffuse", "velvet"):
         targets.append(("closure_roughness", c.roughness))

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import compat
 from .. import settings as settings_table
 from . import camera, lights, mesh, world
 from .instancing import GeometryTable, MaterialTable, instance_name, mesh_needs, placement, unique
@@ -102,6 +103,7 @@ class _Build:
         # Each mesh's BVH is built by the core on a thread of its own while the next mesh is read from Blender.
         if hasattr(self.scene, "build_bvhs_ahead"):
             self.scene.build_bvhs_ahead = True
+        self.scene.multiscatter_light_estimate = compat.MULTISCATTER_LIGHT_ESTIMATE
         self.material_notes = []
         self.materials = MaterialTable(self.scene, self.material_notes, specs)
         self.geometry = GeometryTable(self.scene, self.materials)

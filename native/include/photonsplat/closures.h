@@ -135,7 +135,17 @@ struct LobeValue {
     glm::vec3 f{0.0f};
     float pdf = 0.0f;
 };
-LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
+// Which of Cycles 3.4's two estimates of a Multiscatter GGX lobe an evaluation follows. A direction Cycles draws
+// from the lobe comes with the weight of its random walk on the microsurface (mf_sample): light that leaves after k
+// extra bounces keeps the colour (or the Fresnel colour) of each once. Towards a light sample Cycles evaluates the
+// lobe by another walk (mf_eval), which applies each extra bounce's colour twice. Every other lobe, and a white
+// multi_ggx, is the same in both.
+enum class MultiScatterEstimate : uint8_t {
+    walk,          // the lobe's value where Cycles' path samples it: camera paths' indirect light, photons' bounces
+    light_sample,  // where Cycles samples a light (or the world's map) instead: direct light
+};
+LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo,
+                    MultiScatterEstimate estimate = MultiScatterEstimate::walk);
 // The density with which lobe_sample really draws wi: lobe_eval's pdf, except for the clearcoat, whose sampler (GGX
 // visible normals of its α) is not the density it reports (GTR1's), as in Cycles.
 float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);

@@ -243,6 +243,10 @@ public:
     // then takes them. The same BVHs either way. Off (the default): no thread, every BVH built by ray_tracer().
     void set_build_bvhs_ahead(bool on) { build_bvhs_ahead_ = on; }
     bool build_bvhs_ahead() const { return build_bvhs_ahead_; }
+    // The estimate of Multiscatter GGX lobes that light samples take (closures.h): light_sample (the default) as
+    // Cycles 3.x evaluates its random walk towards a light, walk for Cycles 4.x, whose lobe is the same both ways.
+    void set_multiscatter_light_estimate(MultiScatterEstimate e) { multiscatter_light_estimate_ = e; }
+    MultiScatterEstimate multiscatter_light_estimate() const { return multiscatter_light_estimate_; }
 
 private:
     std::vector<Material> materials_;
@@ -252,6 +256,7 @@ private:
     std::vector<MeshData> meshes_;
     // After meshes_: goes first, dropping the builds not started and waiting for the running one.
     bool build_bvhs_ahead_ = false;
+    MultiScatterEstimate multiscatter_light_estimate_ = MultiScatterEstimate::light_sample;
     std::unique_ptr<BvhQueue> bvh_queue_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};

@@ -35,6 +35,9 @@ struct Bsdf {
     glm::vec3 transparent{0.0f};     // Σ transparent weights
     // The least weight with which a part is chosen for sampling (choose_defensively); 0: each by its own weight.
     float selection_floor = 0.0f;
+    // The estimate of Multiscatter GGX lobes that sampled directions weigh by (closures.h): the walk's, except
+    // where a photon leaves its light's first surface, whose light Cycles finds by sampling that light.
+    MultiScatterEstimate sampled_estimate = MultiScatterEstimate::walk;
 
     bool has_lobes() const { return lobe_count > 0 || lambert != glm::vec3(0.0f); }
     bool directional() const { return lobe_count > 0; }  // the value depends on directions beyond Lambert's
@@ -58,7 +61,9 @@ glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const 
 
 // Σ f of the set's non-delta parts for wi (no cosine). Reflection parts count only for wi on wo's side of the
 // geometric normal, transmission parts only on the other (light leaking under the shading normal must not count).
-glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
+// `estimate`: light_sample where wi is a light's sample (closures.h).
+glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all,
+                    MultiScatterEstimate estimate = MultiScatterEstimate::walk);
 // The density with which bsdf_sample_set(b, set) draws wi (solid angle).
 float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
 // Only the reflection side of bsdf_eval, from a view sample's stored parts: what it receives from photons (splat.h).

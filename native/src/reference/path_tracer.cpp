@@ -93,7 +93,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         if (!front && !transmits) continue;  // light from behind a surface that does not pass it on
         if (!front && glm::dot(in.wi, b.ng) == 0.0f) continue;
         if (in.value == glm::vec3(0.0f)) continue;
-        const glm::vec3 f = bsdf_eval(b, in.wi);
+        const glm::vec3 f = bsdf_eval(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate());
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
         const glm::vec3 side = front ? b.ng : -b.ng;
