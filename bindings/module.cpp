@@ -101,8 +101,8 @@ std::vector<T> dict_list(const py::object& obj, const std::string& field, const 
 
 std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& field) {
     static const std::vector<std::string> kKeys = {"kind", "distribution", "fresnel", "color", "specular_color",
-                                                   "roughness", "alpha_x", "alpha_y", "ior", "texture",
-                                                   "texture_target", "factors_on", "factors_off"};
+                                                   "roughness", "alpha_x", "alpha_y", "ior", "reported_alpha",
+                                                   "texture", "texture_target", "factors_on", "factors_off"};
     return dict_list<ps::Closure>(obj, field, kKeys, [](const py::dict& d, const std::string& where) {
         ps::Closure c;
         if (auto v = dict_item(d, "kind")) c.kind = named(ps::closure_kind_from_string, v, where + ".kind");
@@ -117,6 +117,7 @@ std::vector<ps::Closure> closure_list(const py::object& obj, const std::string& 
         if (auto v = dict_item(d, "alpha_x")) c.alpha_x = py::cast<float>(v);
         if (auto v = dict_item(d, "alpha_y")) c.alpha_y = py::cast<float>(v);
         if (auto v = dict_item(d, "ior")) c.ior = py::cast<float>(v);
+        if (auto v = dict_item(d, "reported_alpha")) c.reported_alpha = py::cast<float>(v);
         if (auto v = dict_item(d, "texture")) c.texture = py::cast<int32_t>(v);
         if (auto v = dict_item(d, "texture_target"))
             c.texture_target = named(ps::texture_target_from_string, v, where + ".texture_target");
@@ -194,7 +195,8 @@ PYBIND11_MODULE(_core, m) {
             "replaces color, -1: none). kind 'closures' takes `closures`, a list of dicts (kind: diffuse, "
             "principled_diffuse, translucent, reflection, refraction, transparent, sheen, velvet; distribution: sharp, "
             "ggx, beckmann, multi_ggx, gtr1; fresnel: none, principled, dielectric, schlick; color (the weight), "
-            "specular_color, roughness, alpha_x, alpha_y, ior, texture, texture_target ('color' or "
+            "specular_color, roughness, alpha_x, alpha_y, ior, reported_alpha (a sharp reflection Cycles 3.x renders "
+            "as Multiscatter GGX of that alpha: Closure::reported_alpha), texture, texture_target ('color' or "
             "'specular_color'), factors_on and factors_off: indices into `factors`), and `factors`, a list of dicts "
             "(kind: fresnel, layer_fresnel, layer_facing; value: the IOR or Blend) whose value at each hit "
             "multiplies a closure's weight (factors_on) or 1 - it (factors_off). program: a shader program dict "

@@ -719,6 +719,10 @@ void validate(const Closure& c, int factor_count, const std::string& where) {
         throw InvalidInput(where + ".alpha_x", "must be finite and in [0, 1], got " + number(c.alpha_x));
     if (!(c.alpha_y >= 0.0f && c.alpha_y <= 1.0f))
         throw InvalidInput(where + ".alpha_y", "must be finite and in [0, 1], got " + number(c.alpha_y));
+    if (!(c.reported_alpha >= 0.0f && c.reported_alpha <= 1.0f))
+        throw InvalidInput(where + ".reported_alpha", "must be finite and in [0, 1], got " + number(c.reported_alpha));
+    if (c.reported_alpha > 0.0f && !(c.kind == ClosureKind::reflection && c.distribution == Distribution::sharp))
+        throw InvalidInput(where + ".reported_alpha", "is for a sharp reflection only");
     if (!(std::isfinite(c.ior) && c.ior > 0.0f))
         throw InvalidInput(where + ".ior", "must be finite and > 0, got " + number(c.ior));
     if (c.texture < -1)
@@ -838,6 +842,27 @@ LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo
     out.f = v.f;
     out.pdf = v.pdf;
     return out;
+}
+
+float cycles3_multiscatter_mirror_pdf(float alpha, float cos_o) {
+    if (!(alpha > 0.0f) || !(cos_o > 0.0f)) return 0.0f;
+    alpha = std::min(alpha, 1.0f);
+    cos_o = std::min(cos_o, 1.0f);
+    const float a2 = alpha * alpha;
+    // D at h = n, as Cycles' multiscatter D_ggx clamps it.
+    const float d = a2 / std::max(kPi * a2 * a2, 1e-7f);
+    // Smith Λ of the view (mf_lambda: 0 within 1e-4 of the normal).
+    const float tan2 = (1.0f - cos_o * cos_o) / std::max(cos_o * cos_o, 1e-7f);
+    const float lambda = cos_o > 0.9999f ? 0.0f : 0.5f * (std::sqrt(1.0f + a2 * tan2) - 1.0f);
+    const float single = 0.25f * d / std::max((1.0f + lambda) * cos_o, 1e-7f);
+    // mf_ggx_albedo: Cycles' fit of the single-scattering albedo, of r = α, which splits its density between the
+    // single scattering and a cosine lobe.
+    const float r = alpha;
+    float albedo = 0.806495f * std::exp(-1.98712f * r * r) + 0.199531f;
+    albedo -= ((((((1.76741f * r - 8.43891f) * r + 15.784f) * r - 14.398f) * r + 6.45221f) * r - 1.19722f) * r +
+               0.027803f) * r + 0.00568739f;
+    albedo = std::clamp(albedo, 0.0f, 1.0f);
+    return albedo * single + (1.0f - albedo) * cos_o * kInvPi;
 }
 
 float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo) {

@@ -82,6 +82,10 @@ float power_heuristic(float chosen, float other) {
     return std::isfinite(a + b) ? a / (a + b) : (chosen >= other ? 1.0f : 0.0f);
 }
 
+float mirror_emitter_weight(float mirror_pdf, float light_pdf) {
+    return mirror_pdf > 0.0f ? power_heuristic(mirror_pdf, light_pdf) : 1.0f;
+}
+
 bool scene_has_transparency(const Scene& scene) {
     for (const Material& m : scene.materials())
         if (m.transparent) return true;

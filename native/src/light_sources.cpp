@@ -1,4 +1,5 @@
 #include "photonsplat/light_sources.h"
+#include "photonsplat/direct_light.h"
 #include "photonsplat/ray_tracer.h"
 
 #include "photonsplat/material_program.h"
@@ -117,6 +118,32 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
         case Kind::world: return world_->sample_incidence(x, n, u1, u2, u3);
     }
     return {};
+}
+
+float LightSources::mirror_weight(size_t i, const glm::vec3& x, const glm::vec3& origin, const glm::vec3& n,
+                                  const glm::vec3& wi, float mirror_pdf) const {
+    if (!(mirror_pdf > 0.0f)) return 1.0f;
+    if (is_delta(i)) return 0.0f;
+    switch (sources_[i].kind) {
+        case Kind::light: {
+            const LightHit h = intersect_light(*sources_[i].light, x, wi);
+            return h.hit ? mirror_emitter_weight(mirror_pdf, h.pdf * lamp_pick_) : 1.0f;
+        }
+        case Kind::emissive_surfaces: {
+            // The emitter the photon left: the first surface along wi.
+            Hit hit;
+            const Ray ray{origin, wi};
+            if (!scene_.ray_tracer().intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kShadowRays))
+                return 1.0f;
+            return mirror_emitter_weight(mirror_pdf,
+                                         emissive_pdf(hit.instance, hit.triangle, x, ray.origin + hit.t * wi) *
+                                             emissive_pick_);
+        }
+        case Kind::world:
+            if (world_->constant() || world_->black()) return 1.0f;  // Cycles samples a constant world by BSDF only
+            return mirror_emitter_weight(mirror_pdf, world_->pdf(x, n, wi) * lamp_pick_);
+    }
+    return 1.0f;
 }
 
 float LightSources::emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x,

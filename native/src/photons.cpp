@@ -69,6 +69,13 @@ struct CausticWeighting {
     bool aimed = false;
 };
 
+// The source a photon left (null: none named), for what Cycles keeps of its light where it first meets a mirror
+// that reports a density (LightSources::mirror_weight).
+struct PhotonSource {
+    const LightSources* sources = nullptr;
+    size_t index = 0;
+};
+
 // What Cycles' Caustics toggles would keep of a photon's light from the surface ahead back to the light, by how
 // the camera path reaches that surface (CausticState, photons.h). Camera paths run the other way, so it is kept
 // from the light on: at each scatter, a camera path reaching it otherwise sees every part, and labels the scatter
@@ -104,8 +111,8 @@ struct PathOptions {
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
 // that surviving photons keep about the power they arrived with. Only delta parts (mirrors, sharp refraction,
 // transparency) keep a path a caustic one: light → delta+ → stored.
-void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 power, const PathOptions& options,
-                Rng& rng, std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
+void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonSource& source, glm::vec3 power,
+                const PathOptions& options, Rng& rng, std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
@@ -180,12 +187,19 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, glm::vec3 pow
         } else if (direct && step.kind != ScatterKind::transparent && weighting.aim && !weighting.aimed) {
             caustic_weight = weighting.aim->ordinary_caustic_weight(weighting.source, emitted);
         }
+        // A mirror Cycles 3.x samples as Multiscatter GGX: a camera path finds this light there by a BSDF ray,
+        // which Cycles weighs against light sampling by the density the mirror reports (mirror_reported_pdf).
+        glm::vec3 step_weight = step.weight;
+        if (direct && step.kind == ScatterKind::mirror && source.sources != nullptr && b.mirror_reported_alpha > 0.0f)
+            step_weight *= source.sources->mirror_weight(
+                source.index, s.position, offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
+                s.geometric_normal, -ray.direction, mirror_reported_pdf(b));
         if (step.kind != ScatterKind::transparent) direct = false;
         // Russian roulette on the weight keeps every surviving photon's power near the emitted one (times the
         // units of the refractions it made: 1/ior² inside glass).
-        const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
+        const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
-        power *= step.weight * (photon_units_across(b, step) / keep);
+        power *= step_weight * (photon_units_across(b, step) / keep);
         if (step.kind == ScatterKind::lobes && !(glm::dot(step.direction, step.transmitted ? -s.geometric_normal
                                                                                             : s.geometric_normal) > 0.0f))
             return;
@@ -205,7 +219,8 @@ void trace_one_photon(const Scene& scene, const LightSources& sources, size_t so
     const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
     CausticWeighting weighting;
     if (aim.active() && aim.aimed_probability(source) > 0.0f) weighting = {&aim, source, false};
-    trace_path(scene, emitted, emitted.power * (weight / source_probability), options, rng, out, weighting);
+    trace_path(scene, emitted, PhotonSource{&sources, source}, emitted.power * (weight / source_probability), options,
+               rng, out, weighting);
 }
 
 // One photon aimed at a mirror or glass object (caustic_aim.h): only its caustic photon is kept.
@@ -214,8 +229,8 @@ void trace_one_aimed_photon(const Scene& scene, const CausticAim& aim, const std
     const size_t source = aim.pick_source(rng.uniform());
     const EmissionSample emitted = aim.sample(source, rng);
     if (!(luminance(emitted.power) > 0.0f)) return;
-    trace_path(scene, emitted, emitted.power / source_probability[source], options, rng, out,
-               CausticWeighting{&aim, source, true});
+    trace_path(scene, emitted, PhotonSource{aim.light_sources(), source}, emitted.power / source_probability[source],
+               options, rng, out, CausticWeighting{&aim, source, true});
 }
 
 // The guide of a sun (emission_guide.h): kPilotsPerCell pilot photons per cell of its (u1, u2) square, each
@@ -236,7 +251,8 @@ EmissionGuide learn_guide(const Scene& scene, const LightSources& sources, size_
             const float u3 = rng.uniform(), u4 = rng.uniform(), u5 = rng.uniform();
             const EmissionSample emitted = sources.sample_emission(source, std::min(u1, 0.99999994f),
                                                                    std::min(u2, 0.99999994f), u3, u4, u5);
-            trace_path(scene, emitted, glm::vec3(1.0f), PathOptions{max_bounces, false}, rng, stored);
+            trace_path(scene, emitted, PhotonSource{&sources, source}, glm::vec3(1.0f), PathOptions{max_bounces, false},
+                       rng, stored);
         }
         double sum = 0.0;
         for (const Photon& p : stored) sum += std::max(0.0f, luminance(p.power));

@@ -201,6 +201,7 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
             if (c.kind == ClosureKind::reflection) {
                 b.mirror += weight * sharp_reflection_fresnel(c.fresnel, specular_color, c.ior,
                                                               std::clamp(glm::dot(b.n, wo), 0.0f, 1.0f));
+                if (b.mirror_reported_alpha == 0.0f) b.mirror_reported_alpha = c.reported_alpha;
             } else {
                 if (is_zero(b.refraction)) b.refraction_eta = eta;
                 b.refraction += weight;
@@ -408,6 +409,11 @@ void choose_defensively(Bsdf& b) { b.selection_floor = bsdf_has_clearcoat(b) ? d
 
 BsdfSample bsdf_sample_set(const Bsdf& b, LobeSet set, float u0, float u1, float u2) {
     return sample_choice(b, lobe_choice(b, set), u0, u1, u2);
+}
+
+float mirror_reported_pdf(const Bsdf& b) {
+    return b.mirror_reported_alpha > 0.0f ? cycles3_multiscatter_mirror_pdf(b.mirror_reported_alpha, glm::dot(b.n, b.wo))
+                                          : 0.0f;
 }
 
 glm::vec3 mirror_direction(const Bsdf& b) {

@@ -45,6 +45,10 @@ struct CameraPath {
     bool split_done = false;   // the pixel's one split (at the first surface with several parts) is behind
     // The ray left a rough transmission, whose own next-event estimation found the emitters this ray may meet.
     bool after_lobe = false;
+    // The ray left a mirror that reports this density for it (mirror_reported_pdf, shading.h), from mirror_x: the
+    // emitters it meets take mirror_emitter_weight (direct_light.h). 0: a true mirror, or no mirror.
+    float mirror_pdf = 0.0f;
+    glm::vec3 mirror_x{0.0f};
     // For the Caustics output, as Cycles labels a path's scatters (kCausticSample): the last scatter was a
     // diffuse-labelled one (translucency), and a glossy, mirror or refracting part followed one.
     bool diffuse_last = false;
@@ -158,7 +162,13 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 if (light == nullptr || p.sources->is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
-                add_emitted(p, path, path.throughput * h.radiance);
+                float w = 1.0f;
+                if (path.mirror_pdf > 0.0f) {
+                    const LightHit drawn = intersect_light(*light, path.mirror_x, ray.direction);
+                    w = mirror_emitter_weight(path.mirror_pdf, (drawn.hit ? drawn.pdf : h.pdf) *
+                                                                   p.sources->cycles_pick_probability(l));
+                }
+                add_emitted(p, path, path.throughput * h.radiance * w);
             }
         }
         if (!found) {
@@ -166,7 +176,14 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             // alone (direct_light.h): not again here.
             if (!path.after_lobe) {
                 const ShaderRay kind = path.camera_ray ? ShaderRay::camera : ShaderRay::reflected;
-                add_emitted(p, path, path.throughput * world_radiance(scene, ray.direction, kind));
+                float w = 1.0f;
+                if (path.mirror_pdf > 0.0f && p.sources != nullptr && !p.sources->world().constant() &&
+                    !p.sources->world().black())
+                    w = mirror_emitter_weight(path.mirror_pdf, p.sources->world().pdf(path.mirror_x,
+                                                                                      glm::vec3(0.0f, 0.0f, 1.0f),
+                                                                                      ray.direction) *
+                                                                   p.sources->cycles_lamp_pick_probability());
+                add_emitted(p, path, path.throughput * world_radiance(scene, ray.direction, kind) * w);
             }
             return;
         }
@@ -177,8 +194,14 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             p.first.depth = p.camera.view_depth(s.position);
             p.first.normal = s.shading_normal;  // already on the side the camera ray came from
         }
-        if (s.material->emission != glm::vec3(0.0f) || s.material->program_emission)
-            add_emitted(p, path, path.throughput * emission_at(scene, s, -ray.direction) * emitter_weight(path));
+        if (s.material->emission != glm::vec3(0.0f) || s.material->program_emission) {
+            float w = emitter_weight(path);
+            if (path.mirror_pdf > 0.0f && p.sources != nullptr)
+                w *= mirror_emitter_weight(path.mirror_pdf,
+                                           p.sources->emissive_pdf(hit.instance, hit.triangle, path.mirror_x, s.position) *
+                                               p.sources->cycles_emissive_pick_probability());
+            add_emitted(p, path, path.throughput * emission_at(scene, s, -ray.direction) * w);
+        }
         if (s.material->lambert_only) {  // most surfaces: one part, the view sample, without a Bsdf to build
             add_view_sample(p, path, s, nullptr, lambert_albedo(scene, s, -ray.direction), -ray.direction, path.throughput);
             return;
@@ -230,7 +253,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         // `same_ray`: transparency, which lets the ray go on as it was (its MIS state, camera-ness and labels
         // kept). `diffuse`: the scatter is one Cycles labels diffuse (translucency).
         const auto go_on = [&](const glm::vec3& direction, const glm::vec3& w, bool transmitted, bool lobe,
-                               bool same_ray = false, bool diffuse = false) {
+                               bool same_ray = false, bool diffuse = false, float mirror_pdf = 0.0f) {
             const glm::vec3 t = path.throughput * w;
             if (!(t.x > 0.0f || t.y > 0.0f || t.z > 0.0f) || !can_continue) return;
             const glm::vec3 side = transmitted ? -s.geometric_normal : s.geometric_normal;
@@ -243,6 +266,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 n.after_lobe = lobe;
                 n.caustic = path.caustic || (path.diffuse_last && !diffuse);
                 n.diffuse_last = diffuse;
+                n.mirror_pdf = mirror_pdf;
+                n.mirror_x = s.position;
             }
             next[next_count++] = n;
         };
@@ -286,7 +311,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (cc.kind == ScatterKind::lobes && u_keep < keep)
                 go_on(cc.direction, cc.weight / (keep * probability[0]), false, true);
         }
-        if (take[2]) go_on(mirror_direction(b), b.mirror / probability[2], false, false);
+        if (take[2])
+            go_on(mirror_direction(b), b.mirror / probability[2], false, false, false, false, mirror_reported_pdf(b));
         if (next_count == 0) return;
         // Every sample of a pixel needs its own branch number (its random numbers in later stages).
         if (sampled_here) next[0].branch = p.next_branch++;

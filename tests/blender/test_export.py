@@ -209,6 +209,23 @@ def test_glossy_distributions_and_sharp_threshold(empty_scene):
     assert one(materials.convert_material(polished), "reflection")["distribution"] == "sharp"
 
 
+def test_a_near_mirror_multiscatter_glossy_keeps_the_alpha_cycles_3_reports(empty_scene):
+    """Cycles 3.x renders a Glossy of Multiscatter GGX at roughness 0.02 as a microfacet lobe whose clamped D all
+    but drops the lights it reflects: the export's mirror keeps its alpha (reported_alpha) for the core to weigh
+    them so. A true mirror to Cycles (alpha^2 < 1e-7), GGX, and Cycles 4.x (which fixed it) keep none."""
+    specs = {}
+    for name, dist, roughness in (("Multi", 'MULTI_GGX', 0.02), ("Ggx", 'GGX', 0.02), ("Polished", 'MULTI_GGX', 0.015)):
+        mat, node = node_material(name, "ShaderNodeBsdfGlossy", Roughness=roughness)
+        node.distribution = dist
+        specs[name] = one(materials.convert_material(mat), "reflection")
+    assert all(d["distribution"] == "sharp" for d in specs.values())
+    if compat.MULTISCATTER_LIGHT_ESTIMATE == "light_sample":
+        assert specs["Multi"]["reported_alpha"] == pytest.approx(0.02 ** 2, rel=1e-5)
+    else:
+        assert "reported_alpha" not in specs["Multi"]
+    assert "reported_alpha" not in specs["Ggx"] and "reported_alpha" not in specs["Polished"]
+
+
 def test_anisotropic_glossy_alphas(empty_scene):
     idname = "ShaderNodeBsdfAnisotropic" if not compat.PRINCIPLED_V2 else "ShaderNodeBsdfGlossy"
     for anisotropy in (0.5, -0.5):

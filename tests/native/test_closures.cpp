@@ -524,6 +524,32 @@ TEST(ClosureSpot, MultiGgxTowardsALightSampleMatchesCyclesEvaluation) {
         }
 }
 
+// The density Cycles 3.4 reports for a near-mirror Multiscatter GGX's own mirror direction (mf_ggx_pdf at h = n),
+// against its formula by hand: albedo(α) D / (4 (1 + Λ) cos θ) + (1 − albedo(α)) cos θ / π, with D = α² / max(π α⁴,
+// 1e-7) clamped. At roughness 0.02 (α 0.0004) that is 0.4 / cos θ: a mirror's is infinite, and a small light's
+// density from the mirror is thousands, so Cycles' BSDF rays keep almost none of its light.
+TEST(ClosureSpot, Cycles3MultiscatterMirrorDensityIsClamped) {
+    const auto by_hand = [](double alpha, double c) {
+        const double a2 = alpha * alpha;
+        const double d = a2 / std::max(kPiD * a2 * a2, 1e-7);
+        const double lambda = 0.5 * (std::sqrt(1.0 + a2 * (1.0 - c * c) / (c * c)) - 1.0);
+        const double r = alpha;
+        double albedo = 0.806495 * std::exp(-1.98712 * r * r) + 0.199531;
+        albedo -= ((((((1.76741 * r - 8.43891) * r + 15.784) * r - 14.398) * r + 6.45221) * r - 1.19722) * r +
+                   0.027803) * r + 0.00568739;
+        albedo = std::clamp(albedo, 0.0, 1.0);
+        return albedo * 0.25 * d / ((1.0 + lambda) * c) + (1.0 - albedo) * c / kPiD;
+    };
+    for (float alpha : {0.0004f, 0.0025f, 0.01f, 0.05f})
+        for (float c : {0.95f, 0.5f, 0.1f})
+            EXPECT_NEAR(cycles3_multiscatter_mirror_pdf(alpha, c) / by_hand(alpha, c), 1.0, 1e-4) << alpha << " " << c;
+    EXPECT_NEAR(cycles3_multiscatter_mirror_pdf(0.0004f, 1.0f), 0.4, 1e-3);
+    // Unclamped (α > 0.0133) it is the single scattering's own density at its peak.
+    EXPECT_GT(cycles3_multiscatter_mirror_pdf(0.05f, 1.0f), 0.9 * 0.25 / (kPiD * 0.05 * 0.05));
+    EXPECT_EQ(cycles3_multiscatter_mirror_pdf(0.0f, 1.0f), 0.0f);
+    EXPECT_EQ(cycles3_multiscatter_mirror_pdf(0.01f, 0.0f), 0.0f);
+}
+
 // The height-correlated G2 of multi_ggx's single scattering, against Cycles' formula by hand: f_ss = D G2 / (4 μ_i μ_o)
 // with G2 = 1 / (1 + Λ(wo) + Λ(wi)), Λ(v) = (√(1 + (α_x² v_x² + α_y² v_y²) / v_z²) − 1) / 2. A lobe whose tint is
 // 0 has no compensation (T = 0), so it is the single scattering alone.

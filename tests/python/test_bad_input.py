@@ -96,6 +96,11 @@ def test_empty_mesh_is_accepted():
                                   closures=[dict(kind="reflection", alpha_x=2.0, alpha_y=0.1)]), "alpha"),
         (lambda s: s.add_material(name="m", kind="closures",
                                   closures=[dict(kind="refraction", ior=0.0)]), "ior"),
+        (lambda s: s.add_material(name="m", kind="closures", closures=[dict(
+            kind="reflection", distribution="sharp", reported_alpha=np.nan)]), r"closures\[0\]\.reported_alpha"),
+        (lambda s: s.add_material(name="m", kind="closures", closures=[dict(
+            kind="reflection", distribution="ggx", alpha_x=0.1, alpha_y=0.1, reported_alpha=0.01)]),
+         "sharp reflection only"),
         (lambda s: s.add_material(name="m", kind="closures",
                                   closures=[dict(kind="diffuse", factors_on=[1])], factors=[dict(kind="fresnel")]),
          "factor"),

@@ -118,3 +118,35 @@ def test_multiscatter_light_samples_follow_the_cycles_version():
     red, green, blue = direct["light_sample"] / direct["walk"]
     assert red == pytest.approx(1.0, abs=1e-6)
     assert green < 0.95 and blue < 0.98
+
+
+def test_a_cycles3_multiscatter_mirror_keeps_little_of_the_lights_it_reflects():
+    """A sharp reflection with reported_alpha is a Glossy of Multiscatter GGX at roughness 0.02 as Cycles 3.4 renders
+    it: a mirror whose directions report the density of a clamped D (0.4 / cos θ at alpha 0.0004), so a light it
+    reflects, met by a camera path or by photons on their way to a wall, weighs power_heuristic(that density, the
+    light's) and is all but gone (measured: the lamp seen in the floor 5e-5 of a mirror's, the wall's caustic 0).
+    The wall's own direct light stays."""
+    def scene(reported_alpha):
+        s = ps.Scene()
+        s.add_material(name="floor", kind="closures", closures=[dict(
+            kind="reflection", distribution="sharp", color=(0.9, 0.9, 0.9), reported_alpha=reported_alpha)])
+        s.add_material(name="wall", color=(0.7, 0.7, 0.7))
+        v, t = quad((-4, -4, 0), (4, -4, 0), (4, 4, 0), (-4, 4, 0))
+        s.add_mesh(name="floor", vertices=v, triangles=t, material_ids=np.zeros(len(t), np.int32))
+        v, t = quad((-4, 3, 0), (4, 3, 0), (4, 3, 3), (-4, 3, 3))
+        s.add_mesh(name="wall", vertices=v, triangles=t, material_ids=np.ones(len(t), np.int32))
+        # A small area light facing down at the floor, which reflects it to the camera and to the wall.
+        s.add_area_light(name="lamp", center=(0, 0.5, 1.5), axis_u=(0.3, 0, 0), axis_v=(0, -0.3, 0),
+                         radiance=(60.0,) * 3)
+        return s
+    camera = ps.look_at_camera(eye=(0, -3, 1.5), target=(0, 1.5, 0), up=(0, 0, 1), width=24, height=24,
+                               fov_y_degrees=60)
+    settings = ps.RenderSettings(photons=40000, iterations=4, seed=2)
+    mirror, _, mirror_passes = ps.render(scene(0.0), camera, settings, passes=True)
+    near, _, near_passes = ps.render(scene(0.0004), camera, settings, passes=True)
+    # The lamp seen in the floor: Cycles' weight there is (0.4/cos)² against its density (a few hundred).
+    seen = mirror_passes["emission"].sum()
+    assert seen > 0.0 and near_passes["emission"].sum() < 0.01 * seen
+    # The wall's caustic of the lamp (light -> floor -> wall) is gone too; the wall's direct light stays.
+    assert near_passes["indirect"].sum() < 0.2 * mirror_passes["indirect"].sum()
+    assert near_passes["direct"].sum() == pytest.approx(mirror_passes["direct"].sum(), rel=1e-6)

@@ -87,6 +87,7 @@ class Closure:
     alpha_x: float = 0.0
     alpha_y: float = 0.0
     ior: float = 1.45
+    reported_alpha: float = 0.0  # a sharp reflection Cycles 3.x renders as Multiscatter GGX of this alpha (core's)
     texture: object = None
     texture_target: str = "color"
     factors_on: tuple = ()
@@ -108,8 +109,8 @@ class Closure:
         """Closures equal but for their colour add up to one."""
         texture = None if self.texture is None else self.texture.key
         return (self.kind, self.distribution, self.fresnel, self.specular_color, self.roughness, self.alpha_x,
-                self.alpha_y, self.ior, texture, self.texture_target, tuple(sorted(self.factors_on)),
-                tuple(sorted(self.factors_off)))
+                self.alpha_y, self.ior, self.reported_alpha, texture, self.texture_target,
+                tuple(sorted(self.factors_on)), tuple(sorted(self.factors_off)))
 
 
 @dataclass
@@ -204,6 +205,8 @@ class MaterialSpec:
                          alpha_y=_placeholder(c.alpha_y, 0.25), ior=_placeholder(c.ior, 1.45))
             if c.kind == "reflection":
                 d["fresnel"] = c.fresnel
+                if c.reported_alpha > 0.0:
+                    d["reported_alpha"] = c.reported_alpha
                 if _reads_specular_color(c):
                     d["specular_color"] = _placeholder(c.specular_color, (0.5, 0.5, 0.5))
             if c.kind in ("diffuse", "principled_diffuse", "velvet"):
@@ -786,10 +789,25 @@ def _microfacet(kind, color, roughness, alpha_x, alpha_y, distribution, fresnel=
                 ior=1.45, label=""):
     """A reflection or refraction closure; sharp when the Blender roughness is at most ROUGHNESS_SHARP (never when
     the roughness is programmed)."""
+    reported_alpha = 0.0
     if distribution == "sharp" or not _is_rough(roughness):
+        reported_alpha = _cycles3_multiscatter_mirror_alpha(kind, distribution, alpha_x, alpha_y)
         distribution, alpha_x, alpha_y = "sharp", 0.0, 0.0
     return Closure(kind, _tuple(color), distribution=distribution, fresnel=fresnel,
-                   specular_color=_tuple(specular_color), alpha_x=alpha_x, alpha_y=alpha_y, ior=ior, label=label)
+                   specular_color=_tuple(specular_color), alpha_x=alpha_x, alpha_y=alpha_y, ior=ior,
+                   reported_alpha=reported_alpha, label=label)
+
+
+def _cycles3_multiscatter_mirror_alpha(kind, distribution, alpha_x, alpha_y):
+    """The alpha a sharp reflection keeps where Cycles 3.x renders it as Multiscatter GGX (a Glossy or Anisotropic
+    BSDF of roughness at most ROUGHNESS_SHARP): Cycles takes it for a mirror only below alpha_x alpha_y = 1e-7, and
+    above that the density it reports for the mirror's direction (its D clamped) all but drops the lights the
+    reflection meets (the core's Closure::reported_alpha). 0: a mirror to Cycles too, or Cycles 4.x (fixed)."""
+    if (kind != "reflection" or distribution != "multi_ggx" or compat.MULTISCATTER_LIGHT_ESTIMATE != "light_sample"
+            or is_reg(alpha_x) or is_reg(alpha_y)):
+        return 0.0
+    product = float(np.float32(alpha_x)) * float(np.float32(alpha_y))
+    return math.sqrt(product) if product >= 1e-7 else 0.0
 
 
 def _tuple(value):

@@ -71,6 +71,7 @@ public:
     bool active() const { return !aim_cdf_.empty(); }  // some light can aim at some target
     size_t pick_source(float u) const;                  // an aimed photon's light, with probability q_l
     float aimed_probability(size_t source) const { return aimed_probability_[source]; }
+    const LightSources* light_sources() const { return &sources_; }
 
     // An aimed photon of `source`; power as sample_emission's (before dividing by P_l) times the balance
     // weight. Power 0: the photon carries nothing (its direction is outside a spot's cone).

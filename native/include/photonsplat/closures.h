@@ -79,6 +79,11 @@ struct Closure {
     float alpha_x = 0.0f, alpha_y = 0.0f;  // reflection / refraction: α along the tangent and the bitangent
                                            // (isotropic: equal; Blender roughness², as Cycles squares it)
     float ior = 1.45f;               // refraction; fresnel principled / dielectric: > 0
+    // A sharp reflection that Cycles 3.x renders as Multiscatter GGX of this α (its roughness at most 0.05, and
+    // α² >= 1e-7, where Cycles would take it for a mirror itself): a mirror here, but the density Cycles reports
+    // for its directions is not a mirror's (cycles3_multiscatter_mirror_pdf), and it weighs the emitters the
+    // reflection meets against Cycles' light sampling by it. 0: a mirror Cycles takes for one.
+    float reported_alpha = 0.0f;
     int32_t texture = -1;            // Scene::textures index multiplying the target at the hit's UV; -1: none
     uint32_t factors_on = 0;         // bit j: the weight is multiplied by Material::factors[j] at the hit
     uint32_t factors_off = 0;        // bit j: ... by 1 − Material::factors[j]
@@ -157,6 +162,13 @@ struct LobeSample {
 };
 // Draws wi for wo from the lobe's own distribution (visible normals for microfacets). u1, u2 in [0, 1).
 LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, float u1, float u2);
+
+// The density Cycles 3.x reports for the mirror direction of a Multiscatter GGX lobe of (isotropic) α, seen at
+// cos θ = n·wo (mf_ggx_pdf at h = n): its single scattering's D is clamped to α² / max(π α⁴, 1e-7), which for
+// α < 0.0133 is far below a mirror's (α = 0.0004, roughness 0.02: 1.6 for 1 / (π α²) = 2e6), so its sampled
+// directions meet lights with almost no MIS weight, and its light samples see almost nothing (mf_eval's D is the
+// same). Cycles 3.4 thus shows almost none of a light's reflection in such a surface (4.x fixed it).
+float cycles3_multiscatter_mirror_pdf(float alpha, float cos_o);
 
 // The lobe's weight in choosing which part to sample, as Cycles weighs the closure (the mean of its weight's
 // channels, a Fresnel closure's times the mean of its Fresnel colour at wo): never in an estimate's value, but

@@ -81,4 +81,10 @@ bool scene_has_transparency(const Scene& scene);
 // The power heuristic of multiple importance sampling (β = 2) for the strategy of density `chosen` against `other`.
 float power_heuristic(float chosen, float other);
 
+// The weight of an emitter a ray meets right after a mirror whose direction reports density `mirror_pdf`
+// (mirror_reported_pdf, shading.h): Cycles 3.x weighs it against sampling that emitter, of density `light_pdf`
+// (Cycles' pick of it included), by the power heuristic; the light samples it weighs it against see next to
+// nothing (shading.h), so the rest of that light is lost, as in Cycles 3.4. 1 after a true mirror (mirror_pdf 0).
+float mirror_emitter_weight(float mirror_pdf, float light_pdf);
+
 }  // namespace ps

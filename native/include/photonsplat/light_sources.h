@@ -35,6 +35,14 @@ public:
     // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
+    // What Cycles 3.x keeps of source i's light reaching x along -wi, where x is a mirror that reports density
+    // `mirror_pdf` for wi (mirror_reported_pdf, shading.h; n: its geometric normal on wi's side, `origin` x
+    // offset for a ray along wi): its BSDF ray meets the source with mirror_emitter_weight (direct_light.h)
+    // against the source's light-sampling density from x, Cycles' pick of it included; a delta light, which no
+    // BSDF ray meets, keeps nothing. 1 for mirror_pdf 0 (a true mirror). For a photon's first scatter.
+    float mirror_weight(size_t i, const glm::vec3& x, const glm::vec3& origin, const glm::vec3& n,
+                        const glm::vec3& wi, float mirror_pdf) const;
+
     // The probability that Cycles 3.4 picks source i for a shading point's one light sample: its light
     // distribution splits its picks evenly over the lamps (a world it importance-samples counts as one), and gives
     // emissive triangles half of them where there are lamps too. We sample every source at every point, so our

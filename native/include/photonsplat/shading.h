@@ -30,6 +30,7 @@ struct Bsdf {
     Lobe lobes[kMaxLobes];
     int lobe_count = 0;
     glm::vec3 mirror{0.0f};          // Σ sharp reflection weights × their Fresnel at n·wo
+    float mirror_reported_alpha = 0.0f;  // Closure::reported_alpha of the (first) sharp reflection that has one
     glm::vec3 refraction{0.0f};      // Σ sharp refraction weights
     float refraction_eta = 1.0f;     // n_other / n_this of the (first) sharp refraction
     glm::vec3 transparent{0.0f};     // Σ transparent weights
@@ -50,6 +51,11 @@ struct Bsdf {
 // side of surface.geometric_normal). Lobes beyond kMaxLobes are merged into the last (never in practice: the
 // add-on refuses materials with more non-delta closures than that).
 Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo);
+
+// The density Cycles reports for the mirror's direction where its sharp reflection is a Cycles 3.x Multiscatter
+// GGX (Closure::reported_alpha), 0 for a true mirror: an emitter its reflection meets weighs
+// power_heuristic(this, the emitter's light-sampling density) (mirror_emitter_weight, direct_light.h).
+float mirror_reported_pdf(const Bsdf& b);
 
 // Which non-delta parts a strategy covers: all of them, the reflection side (Lambert and every lobe that is not a
 // transmission), or the transmission lobes (translucent, rough refraction).

@@ -91,10 +91,17 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
                 const BsdfSample step = bsdf_sample(b, u0, u1, u2);
                 if (step.kind == ScatterKind::none || step.kind == ScatterKind::lobes) break;
+                // A mirror Cycles 3.x samples as Multiscatter GGX keeps what Cycles' MIS gives the light it
+                // reflects (LightSources::mirror_weight).
+                glm::vec3 step_weight = step.weight;
+                if (direct && step.kind == ScatterKind::mirror && b.mirror_reported_alpha > 0.0f)
+                    step_weight *= sources.mirror_weight(
+                        which[k], s.position, offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
+                        s.geometric_normal, -ray.direction, mirror_reported_pdf(b));
                 if (step.kind != ScatterKind::transparent) direct = false;  // L T D is the path tracer's (shadows)
-                const float keep = std::min(1.0f, std::max({step.weight.x, step.weight.y, step.weight.z}));
+                const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
-                power *= step.weight * (photon_units_across(b, step) / keep);  // Cycles' units beyond glass
+                power *= step_weight * (photon_units_across(b, step) / keep);  // Cycles' units beyond glass
                 const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
                 ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             }

@@ -116,6 +116,10 @@ struct LastScatter {
     float pdf = 0.0f;              // its BSDF sample's density
     bool clearcoat = false;        // it held a clearcoat: lights' densities take Cycles' pick (bsdf_has_clearcoat)
     float pick(float cycles_pick) const { return clearcoat ? cycles_pick : 1.0f; }
+    // The last scatter was a mirror reporting this density (mirror_reported_pdf), from mirror_x: what the ray
+    // meets takes mirror_emitter_weight. 0: another scatter, or a true mirror.
+    float mirror_pdf = 0.0f;
+    glm::vec3 mirror_x{0.0f};
 };
 
 // Weight of a light met by the current ray, or < 0 when that path belongs to the photons.
@@ -153,7 +157,12 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
                 const float pdf = (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l));
-                const float w = light_weight(last, c.photon_caustics[l] != 0, pdf);
+                float w = light_weight(last, c.photon_caustics[l] != 0, pdf);
+                if (w > 0.0f && last.mirror_pdf > 0.0f) {
+                    const LightHit from_mirror = intersect_light(*light, last.mirror_x, ray.direction);
+                    w *= mirror_emitter_weight(last.mirror_pdf, (from_mirror.hit ? from_mirror.pdf : h.pdf) *
+                                                                    c.sources.cycles_pick_probability(l));
+                }
                 if (w > 0.0f) radiance += throughput * h.radiance * w;
             }
         }
@@ -166,7 +175,11 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                                         ? world.pdf(last.x, glm::vec3(0.0f, 0.0f, 1.0f), ray.direction) *
                                               last.pick(c.sources.cycles_lamp_pick_probability())
                                         : 0.0f;
-            const float w = sampled ? light_weight(last, false, world_pdf) : 1.0f;
+            float w = sampled ? light_weight(last, false, world_pdf) : 1.0f;
+            if (sampled && last.mirror_pdf > 0.0f)
+                w *= mirror_emitter_weight(last.mirror_pdf, world.pdf(last.mirror_x, glm::vec3(0.0f, 0.0f, 1.0f),
+                                                                      ray.direction) *
+                                                                c.sources.cycles_lamp_pick_probability());
             radiance += throughput * L * w;
             break;
         }
@@ -179,7 +192,12 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                     ? c.sources.emissive_pdf(hit.instance, hit.triangle, last.x, s.position) *
                           last.pick(c.sources.cycles_emissive_pick_probability())
                     : 0.0f;
-            radiance += throughput * emission_at(scene, s, -ray.direction) * light_weight(last, false, light_pdf);
+            float w = light_weight(last, false, light_pdf);
+            if (last.mirror_pdf > 0.0f)
+                w *= mirror_emitter_weight(last.mirror_pdf,
+                                           c.sources.emissive_pdf(hit.instance, hit.triangle, last.mirror_x, s.position) *
+                                               c.sources.cycles_emissive_pick_probability());
+            radiance += throughput * emission_at(scene, s, -ray.direction) * w;
         }
         Bsdf b = shade(scene, s, -ray.direction);
         if (depth == 0) choose_defensively(b);  // the camera's first hit (shading.h)
@@ -202,10 +220,13 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         if (bs.kind == ScatterKind::lobes && !(glm::dot(bs.direction, side) > 0.0f)) break;
         ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), bs.direction};
         // Transparency lets the ray go on as it was: its MIS state stays that of the last real scatter.
-        if (bs.kind == ScatterKind::lobes)
+        if (bs.kind == ScatterKind::lobes) {
             last = LastScatter{true, false, s.position, bs.pdf, bsdf_has_clearcoat(b)};
-        else if (bs.kind != ScatterKind::transparent)
+        } else if (bs.kind != ScatterKind::transparent) {
             last.specular_since = true;
+            last.mirror_pdf = bs.kind == ScatterKind::mirror ? mirror_reported_pdf(b) : 0.0f;
+            last.mirror_x = s.position;
+        }
         if (bs.kind != ScatterKind::transparent) camera_ray = false;
         const float keep = std::max({throughput.x, throughput.y, throughput.z});
         if (!(keep > 0.0f)) break;
