@@ -23,6 +23,14 @@ glm::vec3 point_on_triangle(const WorldTriangle& t, float u1, float u2) {
     return (1.0f - s) * t.v0 + s * (1.0f - u2) * t.v1 + s * u2 * t.v2;
 }
 float triangle_area(const WorldTriangle& t) { return 0.5f * glm::length(glm::cross(t.v1 - t.v0, t.v2 - t.v0)); }
+
+// The solid angle of the triangle whose corners lie at a, b, c from the viewer (Van Oosterom and Strackee).
+double solid_angle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+    const double numerator = std::fabs(glm::dot(a, glm::cross(b, c)));
+    const double denominator = la * lb * lc + glm::dot(a, b) * lc + glm::dot(a, c) * lb + glm::dot(b, c) * la;
+    return 2.0 * std::atan2(numerator, denominator);  // numerator >= 0: in [0, 2π]
+}
 }  // namespace
 
 LightSources::LightSources(const Scene& scene) : scene_(scene), world_(scene.world_light()) {
@@ -49,6 +57,7 @@ LightSources::LightSources(const Scene& scene) : scene_(scene), world_(scene.wor
             const double w = area * luminance(e);
             if (!(w > 0.0) || !std::isfinite(w)) continue;  // also a flattened instance
             emitters_.push_back({i, t});
+            emissive_area_ += area;
             emitter_emission_.push_back(e);
             total += w;
             emitter_cdf_.push_back(static_cast<float>(total));
@@ -120,14 +129,49 @@ LightIncidence LightSources::sample_incidence(size_t i, const glm::vec3& x, cons
     return {};
 }
 
+float LightSources::cycles_lamp_pdf(size_t i, const glm::vec3& x, const glm::vec3& wi) const {
+    const Light* light = sources_[i].light;
+    if (light == nullptr) return 0.0f;
+    const LightHit h = intersect_light(*light, x, wi);
+    if (!h.hit) return 0.0f;
+    if (light->kind == LightKind::area && !light->ellipse) {
+        const glm::dvec3 c = glm::dvec3(light->position) - glm::dvec3(x);
+        const glm::dvec3 u = 0.5 * glm::dvec3(light->axis_u), v = 0.5 * glm::dvec3(light->axis_v);
+        const double omega = solid_angle(c - u - v, c + u - v, c + u + v) + solid_angle(c - u - v, c + u + v, c - u + v);
+        return omega > 0.0 ? static_cast<float>(lamp_pick_ / omega) : 0.0f;
+    }
+    return h.pdf * lamp_pick_;
+}
+
+float LightSources::cycles_emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x,
+                                        const glm::vec3& y) const {
+    if (!(emissive_area_ > 0.0) || !(emissive_pdf(instance, triangle, x, y) > 0.0f)) return 0.0f;  // not an emitter
+    const WorldTriangle t = scene_.world_triangle(instance, triangle);
+    const glm::dvec3 v0(t.v0), v1(t.v1), v2(t.v2), px(x);
+    const glm::dvec3 e0 = v1 - v0, e1 = v2 - v0, e2 = v2 - v1;
+    const glm::dvec3 n = glm::cross(e0, e1);
+    const double area = 0.5 * glm::length(n);
+    const double picked = emissive_pick_ * area / emissive_area_;  // this triangle's share of the picks
+    const double longest2 = std::max({glm::dot(e0, e0), glm::dot(e1, e1), glm::dot(e2, e2)});
+    const double plane_distance = std::fabs(glm::dot(n, v0 - px)) / glm::length(n);
+    if (longest2 > plane_distance * plane_distance) {
+        const double omega = solid_angle(v0 - px, v1 - px, v2 - px);
+        return omega > 0.0 ? static_cast<float>(picked / omega) : 0.0f;
+    }
+    const glm::dvec3 to_light = glm::dvec3(y) - px;
+    const double d2 = glm::dot(to_light, to_light);
+    const double cos_light = std::fabs(glm::dot(n, to_light)) / (glm::length(n) * std::sqrt(d2));
+    return cos_light > 0.0 ? static_cast<float>(picked / area * d2 / cos_light) : 0.0f;
+}
+
 float LightSources::mirror_weight(size_t i, const glm::vec3& x, const glm::vec3& origin, const glm::vec3& n,
                                   const glm::vec3& wi, float mirror_pdf) const {
     if (!(mirror_pdf > 0.0f)) return 1.0f;
     if (is_delta(i)) return 0.0f;
     switch (sources_[i].kind) {
         case Kind::light: {
-            const LightHit h = intersect_light(*sources_[i].light, x, wi);
-            return h.hit ? mirror_emitter_weight(mirror_pdf, h.pdf * lamp_pick_) : 1.0f;
+            const float p = cycles_lamp_pdf(i, x, wi);
+            return p > 0.0f ? mirror_emitter_weight(mirror_pdf, p) : 1.0f;
         }
         case Kind::emissive_surfaces: {
             // The emitter the photon left: the first surface along wi.
@@ -136,8 +180,7 @@ float LightSources::mirror_weight(size_t i, const glm::vec3& x, const glm::vec3&
             if (!scene_.ray_tracer().intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kShadowRays))
                 return 1.0f;
             return mirror_emitter_weight(mirror_pdf,
-                                         emissive_pdf(hit.instance, hit.triangle, x, ray.origin + hit.t * wi) *
-                                             emissive_pick_);
+                                         cycles_emissive_pdf(hit.instance, hit.triangle, x, ray.origin + hit.t * wi));
         }
         case Kind::world:
             if (world_->constant() || world_->black()) return 1.0f;  // Cycles samples a constant world by BSDF only

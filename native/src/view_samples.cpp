@@ -162,12 +162,10 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 if (light == nullptr || p.sources->is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
-                float w = 1.0f;
-                if (path.mirror_pdf > 0.0f) {
-                    const LightHit drawn = intersect_light(*light, path.mirror_x, ray.direction);
-                    w = mirror_emitter_weight(path.mirror_pdf, (drawn.hit ? drawn.pdf : h.pdf) *
-                                                                   p.sources->cycles_pick_probability(l));
-                }
+                const float w =
+                    path.mirror_pdf > 0.0f
+                        ? mirror_emitter_weight(path.mirror_pdf, p.sources->cycles_lamp_pdf(l, path.mirror_x, ray.direction))
+                        : 1.0f;
                 add_emitted(p, path, path.throughput * h.radiance * w);
             }
         }
@@ -197,9 +195,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (s.material->emission != glm::vec3(0.0f) || s.material->program_emission) {
             float w = emitter_weight(path);
             if (path.mirror_pdf > 0.0f && p.sources != nullptr)
-                w *= mirror_emitter_weight(path.mirror_pdf,
-                                           p.sources->emissive_pdf(hit.instance, hit.triangle, path.mirror_x, s.position) *
-                                               p.sources->cycles_emissive_pick_probability());
+                w *= mirror_emitter_weight(path.mirror_pdf, p.sources->cycles_emissive_pdf(hit.instance, hit.triangle,
+                                                                                           path.mirror_x, s.position));
             add_emitted(p, path, path.throughput * emission_at(scene, s, -ray.direction) * w);
         }
         if (s.material->lambert_only) {  // most surfaces: one part, the view sample, without a Bsdf to build

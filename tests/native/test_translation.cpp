@@ -162,6 +162,50 @@ TEST(Instancing, EveryInstanceOfAnEmissiveMeshEmits) {
     EXPECT_NEAR(b.flux(0).x, 10.0f * a.flux(0).x, 1e-2f);
 }
 
+// Cycles 3.x's densities of its light samples, for the weights of its estimate where they matter (a near-mirror
+// Multiscatter GGX, mirror_emitter_weight). A rectangle: spherical-rectangle sampling, 1 / its solid angle, which
+// on the axis of a 2a × 2b rectangle at distance d is 4 asin(ab / √((a² + d²)(b² + d²))); a far one tends to the
+// area density. Emissive triangles: picked by area, sampled by solid angle near and by area far.
+TEST(LightSourcesCycles, DensitiesFollowCycles3Sampling) {
+    Scene scene;
+    const uint32_t lamp = scene.add_material({"lamp", MaterialKind::diffuse, glm::vec3(0.0f), 1.45f, glm::vec3(3.0f)});
+    const uint32_t quad = add_unit_quad(scene, lamp);
+    scene.add_instance(quad, translation(10.0f, 0, 0));  // 1 m², facing +z (two triangles of 0.5 m²)
+    Light area;
+    area.kind = LightKind::area;
+    area.position = {0, 0, 1};
+    area.axis_u = {1, 0, 0};
+    area.axis_v = {0, -1, 0};  // shines down
+    area.value = glm::vec3(1.0f);
+    scene.add_light(area);
+    const LightSources sources(scene);
+    size_t light = 0;
+    while (sources.light(light) == nullptr) ++light;
+    // Render space is centred on the scene: o is the world's origin there.
+    const glm::vec3 o = sources.light(light)->position - glm::vec3(0, 0, 1);
+    // One lamp and emissive triangles: Cycles picks either half the time.
+    const double omega = 4.0 * std::asin(0.25 / 1.25);
+    EXPECT_NEAR(sources.cycles_lamp_pdf(light, o, {0, 0, 1}), 0.5 / omega, 1e-4);
+    EXPECT_NEAR(sources.cycles_lamp_pdf(light, o, glm::normalize(glm::vec3(0.3f, 0.3f, 1))), 0.5 / omega, 1e-4);
+    EXPECT_EQ(sources.cycles_lamp_pdf(light, o, {1, 0, 0}), 0.0f);                           // missed
+    EXPECT_EQ(sources.cycles_lamp_pdf(light, o + glm::vec3(0, 0, 2), {0, 0, -1}), 0.0f);     // its back
+    EXPECT_NEAR(sources.cycles_lamp_pdf(light, o + glm::vec3(0, 0, -999), {0, 0, 1}) / (0.5 * 1000.0 * 1000.0), 1.0,
+                1e-3);  // far: the area density
+    // The emissive quad's triangle under x: near (its 1.41 m edge against a 0.5 m height), 1 / its solid angle
+    // times its share of the picks (0.5 × 0.5 m² / 1 m²); far, the area density d² / (A cos) times the same.
+    const glm::vec3 near = o + glm::vec3(10.2f, -0.1f, 0.5f), y = o + glm::vec3(10.2f, -0.1f, 0.0f);
+    Hit hit;
+    ASSERT_TRUE(scene.ray_tracer().intersect(Ray{near, {0, 0, -1}}, 0.0f, 10.0f, hit));
+    const WorldTriangle t = scene.world_triangle(hit.instance, hit.triangle);
+    const glm::dvec3 a = glm::dvec3(t.v0 - near), b = glm::dvec3(t.v1 - near), c = glm::dvec3(t.v2 - near);
+    const double la = glm::length(a), lb = glm::length(b), lc = glm::length(c);
+    const double tri_omega = 2.0 * std::atan2(std::fabs(glm::dot(a, glm::cross(b, c))),
+                                              la * lb * lc + glm::dot(a, b) * lc + glm::dot(a, c) * lb + glm::dot(b, c) * la);
+    EXPECT_NEAR(sources.cycles_emissive_pdf(hit.instance, hit.triangle, near, y), 0.25 / tri_omega, 1e-4);
+    const glm::vec3 high = o + glm::vec3(10.2f, -0.1f, 5.0f);
+    EXPECT_NEAR(sources.cycles_emissive_pdf(hit.instance, hit.triangle, high, y), 0.25 / 0.5 * 25.0, 1e-3);
+}
+
 TEST(Textures, SrgbIsDecodedAndLookupsAreBilinearAndRepeat) {
     // 2 × 1 texture, row 0 at the bottom: black | sRGB 0.5 grey.
     const float pixels[6] = {0, 0, 0, 0.5f, 0.5f, 0.5f};

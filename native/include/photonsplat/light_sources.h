@@ -35,6 +35,16 @@ public:
     // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
     float emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
 
+    // Cycles 3.x's density of drawing, from x, the point its ray along wi meets on scene light i (y on the
+    // emissive `triangle` of `instance`), Cycles' pick of the light included. Only where Cycles' estimate depends
+    // on it (mirror_emitter_weight); a light's own sampling here has densities of its own. A rectangular area
+    // light: Cycles samples its solid angle (1 / the solid angle it spans from x); an ellipse, a disc, a sphere
+    // or a sun: as intersect_light's. An emissive triangle: Cycles picks emissive triangles by area alone, and
+    // samples a triangle by solid angle where its longest edge is longer than x's distance to its plane, by area
+    // elsewhere (triangle_light_pdf). 0 where Cycles would not draw it.
+    float cycles_lamp_pdf(size_t i, const glm::vec3& x, const glm::vec3& wi) const;
+    float cycles_emissive_pdf(uint32_t instance, uint32_t triangle, const glm::vec3& x, const glm::vec3& y) const;
+
     // What Cycles 3.x keeps of source i's light reaching x along -wi, where x is a mirror that reports density
     // `mirror_pdf` for wi (mirror_reported_pdf, shading.h; n: its geometric normal on wi's side, `origin` x
     // offset for a ray along wi): its BSDF ray meets the source with mirror_emitter_weight (direct_light.h)
@@ -97,6 +107,7 @@ private:
         uint32_t instance, triangle;
     };
     std::vector<Emitter> emitters_;
+    double emissive_area_ = 0.0;  // Σ the emitters' areas (Cycles' pdf_triangles)
     std::vector<float> emitter_cdf_;
     std::vector<float> emitter_probability_;
 

@@ -158,11 +158,8 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
                 const float pdf = (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l));
                 float w = light_weight(last, c.photon_caustics[l] != 0, pdf);
-                if (w > 0.0f && last.mirror_pdf > 0.0f) {
-                    const LightHit from_mirror = intersect_light(*light, last.mirror_x, ray.direction);
-                    w *= mirror_emitter_weight(last.mirror_pdf, (from_mirror.hit ? from_mirror.pdf : h.pdf) *
-                                                                    c.sources.cycles_pick_probability(l));
-                }
+                if (w > 0.0f && last.mirror_pdf > 0.0f)
+                    w *= mirror_emitter_weight(last.mirror_pdf, c.sources.cycles_lamp_pdf(l, last.mirror_x, ray.direction));
                 if (w > 0.0f) radiance += throughput * h.radiance * w;
             }
         }
@@ -195,8 +192,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             float w = light_weight(last, false, light_pdf);
             if (last.mirror_pdf > 0.0f)
                 w *= mirror_emitter_weight(last.mirror_pdf,
-                                           c.sources.emissive_pdf(hit.instance, hit.triangle, last.mirror_x, s.position) *
-                                               c.sources.cycles_emissive_pick_probability());
+                                           c.sources.cycles_emissive_pdf(hit.instance, hit.triangle, last.mirror_x, s.position));
             radiance += throughput * emission_at(scene, s, -ray.direction) * w;
         }
         Bsdf b = shade(scene, s, -ray.direction);
