@@ -474,7 +474,7 @@ CAUSES = {
         and abs(r["reference"]["mean_ratio"] - 1) > REF_TOL,
         "Cycles 3.x's Multiscatter GGX at roughness 0.02 keeps almost none of the lights it reflects (its clamped D), "
         "which the engine and the reference follow since stop 34 (seed 117 was 18.4 of Cycles, 14 2.2), all but the "
-        "dim glow of that reflection its light samples add (docs/closures.md): darker there"),
+        "dim glow its light samples add of emissive surfaces and a programmed world (docs/closures.md)"),
     "microfacet near 0.02": (
         # Held where the newer Cycles, once rendered, agrees with Photon Splat (elsewhere the difference has another
         # cause: seeds 100 and 146 stay 1.051 and 0.954 of Cycles 4.5).
@@ -562,7 +562,8 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   the oracle and the definition is its kernel's: under Blender 3.x such a mirror now keeps its α and the emitters
   its reflection meets take Cycles' weight, in camera paths and in photons (docs/closures.md). Seed 117 was 18.4
   of Cycles, 145 4.95, 14 2.2, 42 1.21, 67 0.92: now 0.971, 1.046, 0.996, 0.998, 1.030; 51, 1, 169 and 43 within
-  0.6 %. Regression scene 14.
+  0.6 %. Its light samples' dim glow of the lamps it reflects is followed as well (`near_mirror_light`). Regression
+  scene 14.
 - **Rooms of Oren–Nayar or Principled walls lost light at their corners** (kernel bias near geometry, in the
   engine only). The boundary correction left every sample with a lobe alone, since dividing a glossy lobe's
   estimate by the coverage brightened the lit tops of small glossy spheres; but Oren–Nayar, Principled diffuse and

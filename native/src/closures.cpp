@@ -844,25 +844,48 @@ LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo
     return out;
 }
 
-float cycles3_multiscatter_mirror_pdf(float alpha, float cos_o) {
-    if (!(alpha > 0.0f) || !(cos_o > 0.0f)) return 0.0f;
+namespace {
+// Smith Λ of a direction at cos θ from the normal, as Cycles' mf_lambda (0 within 1e-4 of the normal).
+float cycles3_lambda(float a2, float cos_t) {
+    if (cos_t > 0.9999f) return 0.0f;
+    const float tan2 = (1.0f - cos_t * cos_t) / std::max(cos_t * cos_t, 1e-7f);
+    return 0.5f * (std::sqrt(1.0f + a2 * tan2) - 1.0f);
+}
+}  // namespace
+
+Cycles3MirrorValue cycles3_multiscatter_mirror_eval(float alpha, const glm::vec3& n, const glm::vec3& wi,
+                                                    const glm::vec3& wo) {
+    Cycles3MirrorValue out;
+    const float cos_o = glm::dot(n, wo), cos_i = glm::dot(n, wi);
+    if (!(alpha > 0.0f) || !(cos_o > 0.0f) || !(cos_i > 0.0f)) return out;
     alpha = std::min(alpha, 1.0f);
-    cos_o = std::min(cos_o, 1.0f);
     const float a2 = alpha * alpha;
-    // D at h = n, as Cycles' multiscatter D_ggx clamps it.
-    const float d = a2 / std::max(kPi * a2 * a2, 1e-7f);
-    // Smith Λ of the view (mf_lambda: 0 within 1e-4 of the normal).
-    const float tan2 = (1.0f - cos_o * cos_o) / std::max(cos_o * cos_o, 1e-7f);
-    const float lambda = cos_o > 0.9999f ? 0.0f : 0.5f * (std::sqrt(1.0f + a2 * tan2) - 1.0f);
-    const float single = 0.25f * d / std::max((1.0f + lambda) * cos_o, 1e-7f);
-    // mf_ggx_albedo: Cycles' fit of the single-scattering albedo, of r = α, which splits its density between the
-    // single scattering and a cosine lobe.
+    const glm::vec3 sum = wi + wo;
+    const float len2 = glm::dot(sum, sum);
+    if (!(len2 > 0.0f)) return out;
+    const float cos_h = std::min(glm::dot(n, sum) / std::sqrt(len2), 1.0f);
+    // D as Cycles' multiscatter D_ggx clamps it: α² / max(π tmp², 1e-7), tmp = sin²θ_h + α² cos²θ_h.
+    const float tmp = (1.0f - cos_h * cos_h) + a2 * cos_h * cos_h;
+    const float d = a2 / std::max(kPi * tmp * tmp, 1e-7f);
+    const float lambda_o = cycles3_lambda(a2, std::min(cos_o, 1.0f)), lambda_i = cycles3_lambda(a2, std::min(cos_i, 1.0f));
+    out.f = d / (4.0f * cos_o * cos_i * (1.0f + lambda_o + lambda_i));  // mf_eval's single scattering, G2
+    // mf_ggx_pdf: its single scattering's density, and a cosine lobe for the rest, split by mf_ggx_albedo, Cycles'
+    // fit of the single-scattering albedo of r = α.
     const float r = alpha;
     float albedo = 0.806495f * std::exp(-1.98712f * r * r) + 0.199531f;
     albedo -= ((((((1.76741f * r - 8.43891f) * r + 15.784f) * r - 14.398f) * r + 6.45221f) * r - 1.19722f) * r +
                0.027803f) * r + 0.00568739f;
     albedo = std::clamp(albedo, 0.0f, 1.0f);
-    return albedo * single + (1.0f - albedo) * cos_o * kInvPi;
+    const float single = 0.25f * d / std::max((1.0f + lambda_o) * cos_o, 1e-7f);
+    out.pdf = albedo * single + (1.0f - albedo) * cos_i * kInvPi;
+    return out;
+}
+
+float cycles3_multiscatter_mirror_pdf(float alpha, float cos_o) {
+    if (!(cos_o > 0.0f)) return 0.0f;
+    cos_o = std::min(cos_o, 1.0f);
+    const glm::vec3 n(0.0f, 0.0f, 1.0f), wo(std::sqrt(1.0f - cos_o * cos_o), 0.0f, cos_o);
+    return cycles3_multiscatter_mirror_eval(alpha, n, glm::vec3(-wo.x, 0.0f, wo.z), wo).pdf;
 }
 
 float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo) {

@@ -128,6 +128,44 @@ glm::vec3 shadow_transmittance(const Scene& scene, const Ray& ray, float t_max, 
     return glm::vec3(0.0f);
 }
 
+glm::vec3 near_mirror_light(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
+                            Rng& rng, uint64_t& rays) {
+    const float alpha = b.mirror_reported_alpha;
+    if (!(alpha > 0.0f) || is_black(b.mirror)) return glm::vec3(0.0f);
+    const LightSources& sources = c.sources;
+    const RayTracer& tracer = c.scene.ray_tracer();
+    const glm::vec3 origin = offset_ray_origin(x, b.ng, rounding_scale);
+    glm::vec3 sum(0.0f);
+    for (size_t l = 0; l < sources.size(); ++l) {
+        if (sources.light(l) == nullptr) continue;  // lamps only
+        const bool delta = sources.is_delta(l);
+        const int n = delta ? 1 : std::max(1, c.samples_per_light);
+        const StrataGrid grid = strata_grid(n);
+        glm::vec3 light_sum(0.0f);
+        for (int k = 0; k < n; ++k) {
+            float u1 = rng.uniform(), u2 = rng.uniform();
+            const float u3 = rng.uniform();
+            grid.place(k, u1, u2);
+            const LightIncidence in = sources.sample_incidence(l, x, b.ng, u1, u2, u3);
+            if (!(glm::dot(in.wi, b.ng) > 0.0f) || is_black(in.value)) continue;
+            const Cycles3MirrorValue v = cycles3_multiscatter_mirror_eval(alpha, b.n, in.wi, b.wo);
+            if (!(v.f > 0.0f)) continue;
+            const float w = delta ? 1.0f : power_heuristic(sources.cycles_lamp_pdf(l, x, in.wi), v.pdf);
+            const float scale = v.f * glm::dot(in.wi, b.n) * w;
+            if (!(scale > 0.0f) || !std::isfinite(scale)) continue;
+            ++rays;
+            const ShadowSegment segment = shadow_segment(x, origin, in);
+            const glm::vec3 t = c.transparency ? shadow_transmittance(c.scene, segment.ray, segment.t_max, true)
+                                               : (tracer.occluded(segment.ray, 0.0f, segment.t_max, kShadowRays)
+                                                      ? glm::vec3(0.0f)
+                                                      : glm::vec3(1.0f));
+            light_sum += in.value * t * scale;
+        }
+        sum += light_sum / static_cast<float>(n);
+    }
+    return b.mirror * sum;
+}
+
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
                           LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences) {
     const Scene& scene = c.scene;

@@ -308,8 +308,14 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (cc.kind == ScatterKind::lobes && u_keep < keep)
                 go_on(cc.direction, cc.weight / (keep * probability[0]), false, true);
         }
-        if (take[2])
+        if (take[2]) {
+            // A near-mirror's own light samples (Cycles 3.x's Multiscatter GGX near roughness 0.02): the glow of
+            // the lamps it reflects, which its reflection's rays all but drop (mirror_emitter_weight).
+            if (b.mirror_reported_alpha > 0.0f && p.direct != nullptr && p.transmitted_direct != nullptr)
+                *p.transmitted_direct += path.throughput / probability[2] *
+                                         near_mirror_light(*p.direct, b, s.position, s.rounding_scale, p.rng, p.rays);
             go_on(mirror_direction(b), b.mirror / probability[2], false, false, false, false, mirror_reported_pdf(b));
+        }
         if (next_count == 0) return;
         // Every sample of a pixel needs its own branch number (its random numbers in later stages).
         if (sampled_here) next[0].branch = p.next_branch++;
@@ -341,16 +347,18 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     out.first_depth.assign(pixels, 0.0f);
 
     // Lights seen along camera paths need the light sources where a path can bounce (delta surfaces, rough
-    // transmission); next-event estimation at rough transmissions needs them too, and a buffer for what it finds.
-    bool bounces = false, rough_transmission = false;
+    // transmission); next-event estimation at rough transmissions and near-mirrors (near_mirror_light) needs them
+    // too, and a buffer for what it finds.
+    bool bounces = false, rough_transmission = false, near_mirrors = false;
     for (const Material& m : scene.materials()) {
         bounces = bounces || m.has_delta || m.transmits;
         rough_transmission = rough_transmission || (m.transmits && m.has_lobes);
+        for (const Closure& c : m.closures) near_mirrors = near_mirrors || c.reported_alpha > 0.0f;
     }
     std::optional<LightSources> sources;
     std::optional<DirectLightContext> direct;
     if (bounces) sources.emplace(scene);
-    if (rough_transmission) {
+    if (rough_transmission || near_mirrors) {
         out.transmitted_direct.assign(pixels, glm::vec3(0.0f));
         out.caustic_emission.assign(pixels, glm::vec3(0.0f));
         direct.emplace(DirectLightContext{scene, *sources, settings.samples_per_light, scene_has_transparency(scene)});

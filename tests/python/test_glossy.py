@@ -124,8 +124,7 @@ def test_a_cycles3_multiscatter_mirror_keeps_little_of_the_lights_it_reflects():
     """A sharp reflection with reported_alpha is a Glossy of Multiscatter GGX at roughness 0.02 as Cycles 3.4 renders
     it: a mirror whose directions report the density of a clamped D (0.4 / cos θ at alpha 0.0004), so a light it
     reflects, met by a camera path or by photons on their way to a wall, weighs power_heuristic(that density, the
-    light's) and is all but gone (measured: the lamp seen in the floor 5e-5 of a mirror's, the wall's caustic 0).
-    The wall's own direct light stays."""
+    light's) and is all but gone (measured: the lamp seen in the floor 5e-5 of a mirror's, the wall's caustic 0)."""
     def scene(reported_alpha):
         s = ps.Scene()
         s.add_material(name="floor", kind="closures", closures=[dict(
@@ -147,6 +146,9 @@ def test_a_cycles3_multiscatter_mirror_keeps_little_of_the_lights_it_reflects():
     # The lamp seen in the floor: Cycles' weight there is (0.4/cos)² against its density (a few hundred).
     seen = mirror_passes["emission"].sum()
     assert seen > 0.0 and near_passes["emission"].sum() < 0.01 * seen
-    # The wall's caustic of the lamp (light -> floor -> wall) is gone too; the wall's direct light stays.
+    # The wall's caustic of the lamp (light -> floor -> wall) is gone too.
     assert near_passes["indirect"].sum() < 0.2 * mirror_passes["indirect"].sum()
-    assert near_passes["direct"].sum() == pytest.approx(mirror_passes["direct"].sum(), rel=1e-6)
+    # The wall's direct light stays; the floor's own light samples add a dim glow of the lamp (near_mirror_light,
+    # in the direct pass): measured 0.61 against the 243 a mirror shows of the lamp.
+    glow = near_passes["direct"].sum() - mirror_passes["direct"].sum()
+    assert 0.0 < glow < 0.01 * seen

@@ -169,6 +169,15 @@ LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo
 // directions meet lights with almost no MIS weight, and its light samples see almost nothing (mf_eval's D is the
 // same). Cycles 3.4 thus shows almost none of a light's reflection in such a surface (4.x fixed it).
 float cycles3_multiscatter_mirror_pdf(float alpha, float cos_o);
+// That lobe towards any wi (n: the normal, unit wi and wo): the f (white, no cosine) its light samples evaluate,
+// the single scattering with the clamped D and the height-correlated G2 (its multiple scattering is nothing at
+// such α), and the density its sampled directions report for wi (mf_ggx_pdf).
+struct Cycles3MirrorValue {
+    float f = 0.0f;
+    float pdf = 0.0f;
+};
+Cycles3MirrorValue cycles3_multiscatter_mirror_eval(float alpha, const glm::vec3& n, const glm::vec3& wi,
+                                                    const glm::vec3& wo);
 
 // The lobe's weight in choosing which part to sample, as Cycles weighs the closure (the mean of its weight's
 // channels, a Fresnel closure's times the mean of its Fresnel colour at wo): never in an estimate's value, but

@@ -58,6 +58,15 @@ struct DirectLightSequences {
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
                           LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences = {});
 
+// What Cycles 3.x's light samples find at a near-mirror Multiscatter GGX (Bsdf::mirror_reported_alpha): its lamps
+// seen through the lobe's clamped D (cycles3_multiscatter_mirror_eval), a dim glow around their reflection, each
+// weighted against the directions the lobe reports by Cycles' own densities (the rest, mirror_emitter_weight,
+// is the BSDF rays'). Times b.mirror (the mirror's colour). Emissive surfaces and a programmed world are left out:
+// their share of that glow is the smallest (a world lights it from everywhere at once, at a density far below a
+// lamp's). 0 where b has no such mirror.
+glm::vec3 near_mirror_light(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
+                            Rng& rng, uint64_t& rays);
+
 // The shadow ray towards the point a light sample `in` (drawn from x) lies on, leaving from `origin` (x stepped
 // off its surface): aimed from origin at that point, so that it ends on the light and not beside it. Stepping off
 // moves the origin along the surface's normal; along in.wi from there, the ray's end would be moved as much and,

@@ -61,8 +61,10 @@ struct ViewSamples {
                                         // dropped, else one per part of the first hit's BSDF that ends in a sample
                                         // (shading.h: its lobes, its mirror, refraction, transparency, transmission)
     std::vector<Lobe> lobes;            // the reflection lobes of kGlossy samples (beyond the Lambert albedo)
-    // width × height, only where the scene has rough transmission or translucency (else empty): light that reached
-    // camera paths through such a surface from the lights directly (its own next-event estimation).
+    // width × height, only where the scene has rough transmission or translucency, or a near-mirror (a Cycles 3.x
+    // Multiscatter GGX near roughness 0.02), else empty: light that reached camera paths through such a surface
+    // from the lights directly (its own next-event estimation), or that a near-mirror's light samples found
+    // (near_mirror_light).
     std::vector<glm::vec3> transmitted_direct;
     // width × height, only where transmitted_direct is: the part of emission, background, lights and
     // transmitted_direct that camera paths found beyond translucency and a glossy, mirror or refracting part

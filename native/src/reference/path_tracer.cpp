@@ -197,6 +197,12 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         }
         Bsdf b = shade(scene, s, -ray.direction);
         if (depth == 0) choose_defensively(b);  // the camera's first hit (shading.h)
+        if (b.mirror_reported_alpha > 0.0f) {  // a near-mirror's light samples (near_mirror_light)
+            uint64_t rays = 0;
+            radiance += throughput * near_mirror_light(DirectLightContext{scene, c.sources, 1, c.transparency}, b,
+                                                       s.position, s.rounding_scale, rng, rays);
+            counters.shadow_rays += rays;
+        }
         if (bsdf_has(b, LobeSet::all)) {
             radiance += throughput * sample_lights(c, b, s, rng, counters);
             if (c.caustics && bsdf_has(b, LobeSet::reflection)) {
