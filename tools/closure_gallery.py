@@ -55,11 +55,6 @@ SEEDS = 4           # Cycles renders per round, with different seeds: their spre
 
 # What was measured about failures the export does not note (25 Nov 2026, at the commit of the closures work).
 DIAGNOSED = {
-    "glossy_multiggx_0.5": (
-        "The reference agrees with Photon Splat (0.917): the closure, not the pipeline. Our multiscatter GGX "
-        "matches Cycles' random walk in a white furnace within 0.85 % (docs/closures.md); Cycles evaluates "
-        "multiscatter GGX stochastically, and its eval (used by light sampling) and its sampling differ "
-        "(docs/closures.md), which a sphere lit by small lights weighs differently from a furnace."),
     "principled_subsurface_0.5": (
         "Subsurface scattering is rendered as diffuse (noted on the material); Cycles' random walk is darker."),
 }
