@@ -9,6 +9,7 @@
 
 #include "photonsplat/brdf.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/glass_multiscatter.h"
 #include "photonsplat/validation.h"
 
 // Every lobe is evaluated in a local frame (x, y, n): the microfacet formulas then read as in the papers, and the
@@ -61,7 +62,8 @@ Frame basis_around(const glm::vec3& n) {
 // anisotropic (Cycles' make_orthonormals_tangent). False where an anisotropic lobe has no usable tangent.
 bool lobe_frame(const Lobe& lobe, const glm::vec3& n, Frame& frame) {
     const bool anisotropic = (lobe.kind == ClosureKind::reflection || lobe.kind == ClosureKind::refraction) &&
-                             lobe.distribution != Distribution::gtr1 && lobe.alpha_x != lobe.alpha_y;
+                             lobe.distribution != Distribution::gtr1 &&
+                             lobe.distribution != Distribution::multi_ggx_glass && lobe.alpha_x != lobe.alpha_y;
     if (!anisotropic) {
         frame = basis_around(n);
         return true;
@@ -89,7 +91,8 @@ struct Alphas {
 // treat the lobe as a delta.
 bool lobe_alphas(const Lobe& lobe, Alphas& a) {
     float ax = lobe.alpha_x, ay = lobe.alpha_y;
-    if (lobe.distribution == Distribution::gtr1) ay = ax;  // Cycles' clearcoat is isotropic
+    // Cycles' clearcoat is isotropic, and so is its Multiscatter GGX Glass (α_y = α_x)
+    if (lobe.distribution == Distribution::gtr1 || lobe.distribution == Distribution::multi_ggx_glass) ay = ax;
     if (!(ax * ay > kSingularAlphaProduct)) return false;
     a.x = std::clamp(ax, kMinGgxAlpha, 1.0f);
     a.y = std::clamp(ay, kMinGgxAlpha, 1.0f);
@@ -357,6 +360,37 @@ MultiScatter multi_scatter(const Lobe& lobe, Alphas a, float mu_o, float mu_i, M
 
 LobeValue zero_value() { return LobeValue{}; }
 
+// Cycles 3.x's Multiscatter GGX Glass on one side (glass_multiscatter.h): its first scattering as Cycles' mf_eval
+// evaluates it (multi_ggx_glass_single), and a cosine lobe for the light of the later ones. η = lobe.eta is seen
+// from wo's side. p_multiple: the chance of sampling that cosine lobe.
+struct MultiGlass {
+    float f_single = 0.0f, pdf_single = 0.0f;
+    glm::vec3 multiple{0.0f};  // albedo of the cosine lobe
+    float p_multiple = 0.0f;
+};
+MultiGlass multi_ggx_glass(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo) {
+    const bool reflect = lobe.kind == ClosureKind::reflection;
+    const float eta = lobe.eta;
+    const GlassMultiscatterAlbedo albedo = glass_multiscatter_albedo(eta, a.x, wo.z, lobe.specular_color);
+    MultiGlass out;
+    out.multiple = reflect ? albedo.multiple_reflect : albedo.multiple_transmit;
+    const float single = reflect ? albedo.single_reflect : albedo.single_transmit;
+    const float m = sampling_weight_of(out.multiple);
+    out.p_multiple = m + single > 0.0f ? std::clamp(m / (m + single), 0.0f, 1.0f) : 0.0f;
+    out.f_single = multi_ggx_glass_single(eta, a.x, wi, wo, &out.pdf_single);
+    return out;
+}
+
+LobeValue eval_multi_ggx_glass(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo) {
+    const bool reflect = lobe.kind == ClosureKind::reflection;
+    if (reflect ? !(wi.z > 0.0f) : !(wi.z < 0.0f)) return zero_value();
+    const MultiGlass g = multi_ggx_glass(lobe, a, wi, wo);
+    LobeValue out;
+    out.f = lobe.weight * (g.f_single + g.multiple * kInvPi);
+    out.pdf = (1.0f - g.p_multiple) * g.pdf_single + g.p_multiple * std::fabs(wi.z) * kInvPi;
+    return out;
+}
+
 LobeValue eval_reflection(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo,
                           MultiScatterEstimate estimate) {
     if (!(wi.z > 0.0f) || !(wo.z > 0.0f)) return zero_value();
@@ -515,10 +549,13 @@ LobeValue eval_local(const Lobe& lobe, const glm::vec3& wi, const glm::vec3& wo,
         case ClosureKind::reflection: {
             Alphas a;
             if (lobe.distribution == Distribution::sharp || !lobe_alphas(lobe, a)) return zero_value();
+            if (lobe.distribution == Distribution::multi_ggx_glass) return eval_multi_ggx_glass(lobe, a, wi, wo);
             return eval_reflection(lobe, a, wi, wo, estimate);
         }
         case ClosureKind::refraction: {
             Alphas a;
+            if (lobe.distribution == Distribution::multi_ggx_glass)
+                return lobe_alphas(lobe, a) ? eval_multi_ggx_glass(lobe, a, wi, wo) : zero_value();
             if (lobe.distribution == Distribution::sharp || lobe.distribution == Distribution::gtr1 ||
                 !lobe_alphas(lobe, a))
                 return zero_value();
@@ -553,6 +590,16 @@ bool sample_local(const Lobe& lobe, const glm::vec3& wo, float u1, float u2, glm
             switch (lobe.distribution) {
                 case Distribution::beckmann: h = sample_beckmann_normal(a, u1, u2); break;
                 case Distribution::gtr1: h = sample_ggx_visible_normal(wo, a, u1, u2); break;  // as Cycles
+                case Distribution::multi_ggx_glass: {
+                    const float p_ms = multi_ggx_glass(lobe, a, wo, wo).p_multiple;
+                    if (u1 < p_ms) {
+                        wi = cosine_hemisphere_local(std::min(u1 / p_ms, 0.99999994f), u2);
+                        return true;
+                    }
+                    u1 = std::min((u1 - p_ms) / (1.0f - p_ms), 0.99999994f);
+                    h = sample_ggx_visible_normal(wo, a, u1, u2);
+                    break;
+                }
                 case Distribution::multi_ggx: {
                     const float p_ms = multi_scatter(lobe, a, wo.z, 0.0f, MultiScatterEstimate::walk).probability;
                     if (u1 < p_ms) {
@@ -577,6 +624,15 @@ bool sample_local(const Lobe& lobe, const glm::vec3& wo, float u1, float u2, glm
                 !lobe_alphas(lobe, a) || !(eta > 0.0f) || !std::isfinite(eta) ||
                 std::fabs(eta - 1.0f) < kSingularEta)
                 return false;
+            if (lobe.distribution == Distribution::multi_ggx_glass) {
+                const float p_ms = multi_ggx_glass(lobe, a, -wo, wo).p_multiple;
+                if (u1 < p_ms) {
+                    wi = cosine_hemisphere_local(std::min(u1 / p_ms, 0.99999994f), u2);
+                    wi.z = -wi.z;
+                    return wi.z < 0.0f;
+                }
+                u1 = std::min((u1 - p_ms) / (1.0f - p_ms), 0.99999994f);
+            }
             const glm::vec3 h = lobe.distribution == Distribution::beckmann
                                     ? sample_beckmann_normal(a, u1, u2)
                                     : sample_ggx_visible_normal(wo, a, u1, u2);
@@ -647,12 +703,14 @@ const char* to_string(Distribution d) {
         case Distribution::beckmann: return "beckmann";
         case Distribution::multi_ggx: return "multi_ggx";
         case Distribution::gtr1: return "gtr1";
+        case Distribution::multi_ggx_glass: return "multi_ggx_glass";
     }
     return "?";
 }
 Distribution distribution_from_string(const std::string& name) {
-    static constexpr std::array<Distribution, 5> all{Distribution::sharp, Distribution::ggx, Distribution::beckmann,
-                                                     Distribution::multi_ggx, Distribution::gtr1};
+    static constexpr std::array<Distribution, 6> all{Distribution::sharp,     Distribution::ggx,
+                                                     Distribution::beckmann,  Distribution::multi_ggx,
+                                                     Distribution::gtr1,      Distribution::multi_ggx_glass};
     return enum_from_string(name, all, "closure.distribution");
 }
 
@@ -702,7 +760,7 @@ TextureTarget texture_target_from_string(const std::string& name) {
 void validate(const Closure& c, int factor_count, const std::string& where) {
     if (static_cast<unsigned>(c.kind) >= static_cast<unsigned>(kClosureKindCount))
         throw InvalidInput(where + ".kind", "unknown closure kind " + std::to_string(int(c.kind)));
-    if (static_cast<unsigned>(c.distribution) > static_cast<unsigned>(Distribution::gtr1))
+    if (static_cast<unsigned>(c.distribution) > static_cast<unsigned>(Distribution::multi_ggx_glass))
         throw InvalidInput(where + ".distribution", "unknown distribution " + std::to_string(int(c.distribution)));
     if (static_cast<unsigned>(c.fresnel) > static_cast<unsigned>(FresnelKind::schlick))
         throw InvalidInput(where + ".fresnel", "unknown Fresnel kind " + std::to_string(int(c.fresnel)));
@@ -729,6 +787,9 @@ void validate(const Closure& c, int factor_count, const std::string& where) {
         throw InvalidInput(where + ".texture", "must be -1 (none) or a texture index, got " + std::to_string(c.texture));
     if (c.kind == ClosureKind::refraction && c.distribution == Distribution::gtr1)
         throw InvalidInput(where + ".distribution", "'gtr1' (clearcoat) is a reflection distribution only");
+    if (c.distribution == Distribution::multi_ggx_glass &&
+        !(c.kind == ClosureKind::reflection || c.kind == ClosureKind::refraction))
+        throw InvalidInput(where + ".distribution", "'multi_ggx_glass' is for reflection and refraction only");
     const int count = std::clamp(factor_count, 0, 32);
     const uint32_t allowed = count >= 32 ? 0xFFFFFFFFu : ((1u << count) - 1u);
     if ((c.factors_on & ~allowed) != 0)
@@ -903,6 +964,15 @@ float lobe_sampling_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3
             w *= 0.08f * (1.0f - cos_o) * (1.0f - cos_o) + 0.001f;
             break;
         default: break;
+    }
+    if (lobe.distribution == Distribution::multi_ggx_glass) {
+        // The walk's light on this side (its Fresnel split among it), not a Fresnel colour of the weight.
+        const GlassMultiscatterAlbedo albedo =
+            glass_multiscatter_albedo(lobe.eta, lobe.alpha_x, cos_o, lobe.specular_color);
+        const bool reflect = lobe.kind == ClosureKind::reflection;
+        w = sampling_weight_of(lobe.weight) *
+            ((reflect ? albedo.single_reflect : albedo.single_transmit) +
+             sampling_weight_of(reflect ? albedo.multiple_reflect : albedo.multiple_transmit));
     }
     return std::isfinite(w) ? std::max(w, 0.0f) : 0.0f;
 }

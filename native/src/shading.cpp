@@ -221,7 +221,8 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
         l.roughness = c.roughness;
         l.alpha_x = c.alpha_x;
         l.alpha_y = c.alpha_y;
-        l.eta = c.kind == ClosureKind::refraction ? eta : c.ior;
+        // A refraction's η, and a Multiscatter GGX Glass's on either side, are seen from the side the ray came from.
+        l.eta = c.kind == ClosureKind::refraction || c.distribution == Distribution::multi_ggx_glass ? eta : c.ior;
         l.tangent = surface.tangent;
         if (b.lobe_count < kMaxLobes) {
             b.lobes[b.lobe_count++] = l;

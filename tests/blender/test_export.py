@@ -256,6 +256,25 @@ def test_glass_splits_by_a_fresnel_factor(empty_scene):
     assert [d["kind"] for d in closures_of(r)] == ["refraction"] and r.core_arguments()["factors"] == []
 
 
+def test_a_multiscatter_glass_is_the_walk_on_both_sides(empty_scene):
+    """A rough Glass of Multiscatter GGX: one multi_ggx_glass closure per side, unweighted by a Fresnel factor (the
+    walk's microfacets pick reflection or refraction), its colour passed on as the tint of the later scatterings,
+    and the approximation noted. A smooth one stays a split sharp glass."""
+    rough, node = node_material("Mg", "ShaderNodeBsdfGlass", Color=(1.0, 0.9, 0.8, 1.0), IOR=1.4, Roughness=0.5)
+    node.distribution = 'MULTI_GGX'
+    spec = materials.convert_material(rough)
+    r, t = one(spec, "reflection"), one(spec, "refraction")
+    assert (r["distribution"], t["distribution"]) == ("multi_ggx_glass", "multi_ggx_glass")
+    assert spec.core_arguments()["factors"] == [] and "factors_on" not in r and "factors_off" not in t
+    assert r["alpha_x"] == pytest.approx(0.25) and t["ior"] == pytest.approx(1.4)
+    assert approx(t["color"], (1.0, 0.9, 0.8)) and approx(t["specular_color"], (1.0, 0.9, 0.8))
+    assert any("multiscatter GGX glass" in n for n in spec.notes)
+    smooth, node = node_material("Ms", "ShaderNodeBsdfGlass", IOR=1.4, Roughness=0.02)
+    node.distribution = 'MULTI_GGX'
+    spec = materials.convert_material(smooth)
+    assert one(spec, "refraction")["distribution"] == "sharp" and spec.notes == []
+
+
 def test_basic_shaders(empty_scene):
     made = {
         "diffuse": node_material("Di", "ShaderNodeBsdfDiffuse", Color=(0.5, 0.25, 0.125, 1.0), Roughness=0.5),

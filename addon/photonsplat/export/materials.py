@@ -207,8 +207,8 @@ class MaterialSpec:
                 d["fresnel"] = c.fresnel
                 if c.reported_alpha > 0.0:
                     d["reported_alpha"] = c.reported_alpha
-                if _reads_specular_color(c):
-                    d["specular_color"] = _placeholder(c.specular_color, (0.5, 0.5, 0.5))
+            if _reads_specular_color(c):
+                d["specular_color"] = _placeholder(c.specular_color, (0.5, 0.5, 0.5))
             if c.kind in ("diffuse", "principled_diffuse", "velvet"):
                 d["roughness"] = _placeholder(c.roughness, 0.5)
             if c.texture is not None:
@@ -287,8 +287,10 @@ def _placeholder(value, default):
 
 def _reads_specular_color(c):
     """Whether the core reads the closure's specular colour: the Fresnel's colour at normal incidence, or for a
-    Multiscatter GGX without Fresnel (Glossy) the tint of its bounces after the first, without which the core's
-    lobe has no multiple scattering at all."""
+    Multiscatter GGX without Fresnel (Glossy) and a Multiscatter Glass's extra light the tint of its bounces after
+    the first, without which the core's lobe has no multiple scattering at all."""
+    if c.distribution == "multi_ggx_glass":
+        return True
     return c.kind == "reflection" and (c.fresnel in ("principled", "schlick") or c.distribution == "multi_ggx")
 
 
@@ -933,11 +935,21 @@ def _glass(node, stack, notes):
     roughness = sp.clamp01(b, inputs.number("Roughness"))
     eta = sp.clamp_min(b, inputs.number("IOR", 1.45), 1e-5)
     distribution = _distribution(node, notes)
-    if distribution == "multi_ggx":
-        if _is_rough(roughness):
-            notes.append("multiscatter GGX glass rendered as single-scatter GGX reflection and refraction")
-        distribution = "ggx"
     a = sp.square(b, roughness)
+    if distribution == "multi_ggx" and _is_rough(roughness):
+        # Multiscatter GGX: Cycles 3.x's random walk on the microsurface, each microfacet reflecting with its own
+        # Fresnel or refracting, not a split by the Fresnel of the shading normal. The core's multi_ggx_glass
+        # closures are its two sides; the Glass colour also tints each scattering after the first (Cycles clamps
+        # it to [0, 1] there).
+        notes.append("multiscatter GGX glass: the light scattered more than once given a cosine shape")
+        tint = _tuple(sp.clamp01(b, color))
+        reflection, refraction = (
+            Closure(kind, _tuple(color), distribution="multi_ggx_glass", specular_color=tint, alpha_x=a, alpha_y=a,
+                    ior=eta, label=kind) for kind in ("reflection", "refraction"))
+        closures = [_textured_color(reflection, texture, color), _textured_color(refraction, texture, color)]
+        return Shader(closures, summary=f"glass, {_ior_text(eta)}, rough, multiscatter")
+    if distribution == "multi_ggx":
+        distribution = "ggx"
     on, off = _fresnel_split(b, notes, eta)
     reflection = _microfacet("reflection", color, roughness, a, a, distribution, ior=eta, label="reflection")
     refraction = _microfacet("refraction", color, roughness, a, a, distribution, ior=eta, label="refraction")

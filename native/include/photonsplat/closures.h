@@ -38,6 +38,9 @@ enum class Distribution : uint8_t {
     beckmann,   // Beckmann with Smith G (Cycles' rational approximation)
     multi_ggx,  // Cycles' multiscatter GGX: GGX plus the energy its single scattering loses (closures.cpp says how)
     gtr1,       // Principled v1's clearcoat: GTR1 distribution, GGX masking with α = 0.25 (Cycles' clearcoat)
+    multi_ggx_glass,  // Cycles 3.x's Multiscatter GGX Glass, on the side of a reflection closure or of a
+                      // refraction one (glass_multiscatter.h): the whole Glass is the two, unweighted by Fresnel;
+                      // specular_color is the Glass colour its later scatterings multiply by
 };
 
 enum class FresnelKind : uint8_t {

@@ -1,0 +1,44 @@
+#pragma once
+// Multiscatter GGX glass (Cycles 3.x's Glass BSDF of that distribution, Distribution::multi_ggx_glass).
+//
+// Cycles renders it as a random walk on a GGX microsurface (Heitz et al. 2016; its mf_sample and mf_eval for
+// glass): each microfacet reflects with the dielectric Fresnel of its own normal or refracts, and the Glass colour
+// multiplies every scattering after the first. Light leaves on the side it arrived from or on the other. The core
+// evaluates the first scattering as Cycles' mf_eval does (closures.cpp), and gives the light of the later ones to
+// a cosine lobe on each side, the shape Cycles' own density assumes for it (mf_glass_pdf). How much light that is
+// comes from running the walk itself, once per η: a table per roughness and cos θ_o of what it returns on each
+// side after one, two, and three or more scatterings (glass_multiscatter.cpp). docs/closures.md has the
+// measurements.
+#include <glm/vec3.hpp>
+
+namespace ps {
+
+// The albedos of the walk for a view of cos θ_o, per unit of the closure's weight: of its first scattering (white:
+// the Glass colour is in the weight) and of its later ones (each multiplied by the tint), on each side.
+// multiple_* also holds what the walk's first scattering returns beyond multi_ggx_glass_single's integral (up to
+// 17 % of it at roughness 0.8 and cos θ_o 0.3, where Cycles' two disagree; within 0.3 % up to roughness 0.5).
+struct GlassMultiscatterAlbedo {
+    float single_reflect = 0.0f, single_transmit = 0.0f;
+    glm::vec3 multiple_reflect{0.0f}, multiple_transmit{0.0f};
+};
+
+// eta: n_other / n_this seen from wo's side (> 0, finite); alpha: the isotropic GGX α (roughness²) in [0, 1];
+// cos_o: n·wo in (0, 1]; tint: the Glass colour, in [0, 1]. Thread-safe; the first call for an η builds its
+// table (a fraction of a second), later calls only read it.
+GlassMultiscatterAlbedo glass_multiscatter_albedo(float eta, float alpha, float cos_o, const glm::vec3& tint);
+
+// The first scattering of the walk towards wi, seen from wo (local frame: n = +z, wo.z > 0; wi.z > 0 reflected,
+// < 0 transmitted), white, as Cycles' mf_eval evaluates it: the dielectric Fresnel of the microfacet normal and the
+// height-correlated masking of uniform heights; transmitted, with η² (what the walk returns). Its density under
+// visible-normal sampling from wo goes to *pdf (may be null).
+float multi_ggx_glass_single(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo, float* pdf);
+
+// The walk's energies for white glass (tint 1) at one (eta, alpha, cos_o), by side and by the number of
+// scatterings, estimated with `walks` walks (the table's own numbers: tests compare them with Cycles').
+struct GlassWalkEnergy {
+    float reflect[3] = {0.0f, 0.0f, 0.0f};   // after 1, 2, and 3 or more scatterings (up to Cycles' 10)
+    float transmit[3] = {0.0f, 0.0f, 0.0f};
+};
+GlassWalkEnergy glass_walk_energy(float eta, float alpha, float cos_o, int walks, unsigned seed = 1);
+
+}  // namespace ps
