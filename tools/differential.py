@@ -548,9 +548,11 @@ CAUSES = {
         # The reference renders the export alike: where it agrees with Cycles, the cause lies elsewhere.
         lambda r: any("multiscatter GGX glass" in w for w in r["warnings"])
         and abs(r["reference"]["mean_ratio"] - 1) > REF_TOL,
-        "the export renders Multiscatter GGX glass as single-scatter GGX (noted on the material): darker where the "
-        "glass is rough; the reference shares it (seed 10: Photon Splat 0.52 and the reference 0.58 against "
-        "Cycles' 0.64 at scale 1)"),
+        "Cycles 3.x renders a Multiscatter GGX Glass as a random walk on its microsurface, which the engine and the "
+        "reference follow since stop 35 (single-scatter GGX before: seed 10 0.871, 22 0.951; now 0.940 and 1.003) "
+        "but for the shape of the light it scatters more than once (a cosine lobe) and Cycles' own estimate towards "
+        "a light sample behind the glass, which is not its walk's (docs/closures.md, multi_ggx_glass; seed 93 went "
+        "1.019 to 1.038). Principled's Multiscatter glass is still single-scatter GGX"),
     "multiscatter GGX near 0.02": (
         lambda r: any(m["kind"] == "glossy" and m.get("distribution") == "MULTI_GGX" and 0 < m["roughness"] <= 0.03
                       for m in materials_of(r["record"]))
@@ -790,8 +792,9 @@ Where Cycles is not a usable oracle at these samples:
   on a closed room whose caustics of small lights (13 % of the image) Cycles finds only by BSDF rays; at 2 × 4096
   samples its mean is 4.0 % higher, and Photon Splat and the reference are 0.994 and 0.993 of it (1.034 and 1.033
   of the 256-sample pair). Doubling until successive rounds agree, not only the two seeds, would catch it.
-- **Multiscatter GGX glass** is rendered as single-scatter GGX by the export (noted on the material): darker where
-  the glass is rough, in the reference too.
+- **Multiscatter GGX glass** (a Glass BSDF) follows Cycles 3.x's walk on the microsurface since stop 35; its light
+  scattered more than once has a cosine shape, and Cycles' light samples through the glass use an estimate of their
+  own (docs/closures.md). Principled's Multiscatter glass is still single-scatter GGX (noted on the material).
 
 Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 

@@ -590,18 +590,12 @@ bool sample_local(const Lobe& lobe, const glm::vec3& wo, float u1, float u2, glm
             switch (lobe.distribution) {
                 case Distribution::beckmann: h = sample_beckmann_normal(a, u1, u2); break;
                 case Distribution::gtr1: h = sample_ggx_visible_normal(wo, a, u1, u2); break;  // as Cycles
+                case Distribution::multi_ggx:
                 case Distribution::multi_ggx_glass: {
-                    const float p_ms = multi_ggx_glass(lobe, a, wo, wo).p_multiple;
-                    if (u1 < p_ms) {
-                        wi = cosine_hemisphere_local(std::min(u1 / p_ms, 0.99999994f), u2);
-                        return true;
-                    }
-                    u1 = std::min((u1 - p_ms) / (1.0f - p_ms), 0.99999994f);
-                    h = sample_ggx_visible_normal(wo, a, u1, u2);
-                    break;
-                }
-                case Distribution::multi_ggx: {
-                    const float p_ms = multi_scatter(lobe, a, wo.z, 0.0f, MultiScatterEstimate::walk).probability;
+                    // The light scattered more than once: a cosine lobe, drawn by its share of the light.
+                    const float p_ms = lobe.distribution == Distribution::multi_ggx
+                                           ? multi_scatter(lobe, a, wo.z, 0.0f, MultiScatterEstimate::walk).probability
+                                           : multi_ggx_glass(lobe, a, wo, wo).p_multiple;
                     if (u1 < p_ms) {
                         wi = cosine_hemisphere_local(std::min(u1 / p_ms, 0.99999994f), u2);
                         return true;
