@@ -167,9 +167,10 @@ void bind_translation(py::module_& m) {
         .def(
             "add_instance",
             [](ps::Scene& s, uint32_t mesh, const py::object& transform, const std::string& name, bool camera,
-               bool shadow, bool indirect, const py::object& object_info) {
+               bool shadow, bool indirect, const py::object& object_info, float terminator_offset) {
                 const uint32_t id = s.add_instance(mesh, dmat4(transform, "instance '" + name + "'.transform"), name,
                                                    visibility_bits(camera, shadow, indirect));
+                if (terminator_offset != 0.0f) s.set_instance_terminator_offset(id, terminator_offset);
                 if (!object_info.is_none()) {
                     const std::string where = "instance '" + name + "'.object_info";
                     if (!py::isinstance<py::dict>(object_info))
@@ -188,11 +189,13 @@ void bind_translation(py::module_& m) {
                 return id;
             },
             "mesh_id"_a, "transform"_a, "name"_a = "", "visible_camera"_a = true, "visible_shadow"_a = true,
-            "visible_indirect"_a = true, "object_info"_a = py::none(),
+            "visible_indirect"_a = true, "object_info"_a = py::none(), "terminator_offset"_a = 0.0f,
             "Places mesh mesh_id with a (4,4) row-major object-to-world transform (read in float64: a scene far "
             "from the origin keeps its precision); returns the instance id. "
             "visible_*: which rays see it (camera rays, shadow rays, every other ray). object_info: {color (r,g,b,a), "
-            "pass_index, random} for Object Info nodes.")
+            "pass_index, random} for Object Info nodes. terminator_offset: Cycles' shadow terminator Geometry "
+            "Offset in [0, 1] (Blender's default is 0.1): shadow rays from smooth triangles towards lights near "
+            "their horizon start on the smooth surface.")
         .def(
             "set_instance_transform",
             [](ps::Scene& s, uint32_t instance, const py::object& transform) {

@@ -167,7 +167,8 @@ glm::vec3 near_mirror_light(const DirectLightContext& c, const Bsdf& b, const gl
 }
 
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
-                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences) {
+                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences,
+                          const TerminatorLift* terminator) {
     const Scene& scene = c.scene;
     const LightSources& sources = c.sources;
     const int samples_per_light = c.samples_per_light;
@@ -234,7 +235,11 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             else
                 grid.place(k, u1, u2);
             const LightIncidence in = sources.sample_incidence(l, x, side, u1, u2, u3);
-            if (!(glm::dot(in.wi, side) > 0.0f) || is_black(in.value)) continue;
+            if (is_black(in.value)) continue;
+            // Under the triangle's horizon but above the shading normal's, Cycles traces a light sample from the
+            // smooth surface where its object has a terminator offset (shadow_terminator.h), else drops it.
+            const bool below = !(glm::dot(in.wi, side) > 0.0f);
+            if (below && !(terminator != nullptr && terminator_reaches_below(*terminator, b.n, side, in.wi))) continue;
             const float cos_shading = std::fabs(glm::dot(in.wi, b.n));
             // The shading normal only weights the light; on the reflection side it must agree with the geometric.
             if (!transmission && !(glm::dot(in.wi, b.n) > 0.0f)) continue;
@@ -243,8 +248,9 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             // programmed world is sampled by its map: the whole BSDF, weighted against the BSDF's directions.
             const bool world = sources.is_world(l) && world_constant;
             const bool weighted = (mis || sources.is_world(l)) && !world;
-            const glm::vec3 f = weighted ? bsdf_eval(b, in.wi, set, scene.multiscatter_light_estimate())
-                                         : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
+            const glm::vec3 f = below      ? bsdf_eval_shading_side(b, in.wi, set, scene.multiscatter_light_estimate())
+                                : weighted ? bsdf_eval(b, in.wi, set, scene.multiscatter_light_estimate())
+                                           : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
             if (is_black(f)) continue;
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
@@ -253,7 +259,11 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             const float w = (delta || !weighted) ? 1.0f
                             : probes == n        ? power_heuristic(p_light, p_bsdf)
                                                  : power_heuristic(float(n) * p_light, float(probes) * p_bsdf);
-            const ShadowSegment segment = shadow_segment(x, origin, in);
+            const ShadowSegment segment =
+                terminator == nullptr
+                    ? shadow_segment(x, origin, in)
+                    : shadow_segment(x, offset_ray_origin(terminator_origin(x, *terminator, b.n, side, in.wi), side,
+                                                          rounding_scale), in);
             shadow[pending] = segment.ray;
             t_min[pending] = 0.0f;
             t_max[pending] = segment.t_max;
@@ -377,8 +387,10 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                 bsdf_points.emplace(settings.sequence_seed, key, SampleSequence::kBsdfStream);
                 sequences = {&*light_points, &*bsdf_points, settings.iteration};
             }
+            const TerminatorLift* lift = samples.terminator.size() == samples.samples.size() ? &samples.terminator[i]
+                                                                                               : nullptr;
             out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                    LobeSet::reflection, rng, rays, sequences);
+                                                    LobeSet::reflection, rng, rays, sequences, lift);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

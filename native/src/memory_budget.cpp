@@ -211,11 +211,12 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
 }
 
 void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples,
-                           size_t lobes, bool transmitted_direct) {
-    // The lobes of glossy samples, and the light that came through rough transmission (transmitted_direct and
-    // its caustic part, caustic_emission: a vec3 a pixel each), known once traced.
-    const double extra =
-        double(lobes) * double(sizeof(Lobe)) + (transmitted_direct ? 2.0 * double(pixels) * sizeof(glm::vec3) : 0.0);
+                           size_t lobes, bool transmitted_direct, size_t terminator_lifts) {
+    // The lobes of glossy samples, the light that came through rough transmission (transmitted_direct and its
+    // caustic part, caustic_emission: a vec3 a pixel each) and the samples' terminator lifts, known once traced.
+    const double extra = double(lobes) * double(sizeof(Lobe)) +
+                         (transmitted_direct ? 2.0 * double(pixels) * sizeof(glm::vec3) : 0.0) +
+                         double(terminator_lifts) * double(sizeof(TerminatorLift));
     if (extra > 0.0) budget.reserve("view_samples", extra, "resolution");
     if (samples <= pixels) return;
     // Each per-sample structure grows by what its prediction for `samples` adds to the one for `pixels`, recorded

@@ -256,7 +256,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
         reserve_split_samples(budget, settings, pixels, samples.samples.size(), samples.lobes.size(),
-                              !samples.transmitted_direct.empty());
+                              !samples.transmitted_direct.empty(), samples.terminator.size());
 
         // 2. Direct light at the view samples.
         control.begin_stage("direct light", 0.15, 0.35);

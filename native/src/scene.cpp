@@ -484,6 +484,23 @@ void Scene::set_instance_info(uint32_t instance, const glm::vec4& color, float p
     i.random = random;
 }
 
+void Scene::set_instance_terminator_offset(uint32_t instance, float offset) {
+    touch();
+    if (instance >= instances_.size())
+        throw InvalidInput("instance", "is " + std::to_string(instance) + ", but the scene has " +
+                                           std::to_string(instances_.size()) + " instances");
+    if (!(offset >= 0.0f && offset <= 1.0f))
+        throw InvalidInput("instance '" + instances_[instance].name + "'.terminator_offset",
+                           "must be in [0, 1] (Cycles' Geometry Offset)");
+    instances_[instance].terminator_offset = offset;
+}
+
+bool Scene::any_terminator_offset() const {
+    for (const Instance& i : instances_)
+        if (i.terminator_offset > 0.0f && !meshes_[i.mesh].normals.empty() && !instance_is_flat(i)) return true;
+    return false;
+}
+
 uint32_t Scene::attribute_id(const std::string& name) {
     for (size_t i = 0; i < attribute_names_.size(); ++i)
         if (attribute_names_[i] == name) return static_cast<uint32_t>(i);

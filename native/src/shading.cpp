@@ -263,6 +263,17 @@ glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatte
     return f;
 }
 
+glm::vec3 bsdf_eval_shading_side(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate) {
+    const bool above = glm::dot(wi, b.n) > 0.0f;
+    if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
+    if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
+    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
+    glm::vec3 f(0.0f);
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo).f;
+    return f;
+}
+
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
                                const glm::vec3& wi, const glm::vec3& wo) {
     return reflection_value(lambert, lobes, lobe_count, n, wi, wo);

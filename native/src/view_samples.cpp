@@ -20,13 +20,15 @@
 #include "photonsplat/scattering.h"
 #include "photonsplat/scene.h"
 #include "photonsplat/shading.h"
+#include "photonsplat/shadow_terminator.h"
 #include "photonsplat/stats.h"
 
 namespace ps {
 
 size_t ViewSamples::bytes() const {
     return samples.capacity() * sizeof(ViewSample) + lobes.capacity() * sizeof(Lobe) +
-           transmitted_direct.capacity() * sizeof(glm::vec3) + caustic_emission.capacity() * sizeof(glm::vec3) +
+           terminator.capacity() * sizeof(TerminatorLift) + transmitted_direct.capacity() * sizeof(glm::vec3) +
+           caustic_emission.capacity() * sizeof(glm::vec3) +
            emission.capacity() * sizeof(glm::vec3) +
            alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
            first_depth.capacity() * sizeof(float);
@@ -73,6 +75,7 @@ struct PixelPaths {
     Rng& rng;
     std::vector<ViewSample>& found;
     std::vector<Lobe>& found_lobes;
+    std::vector<TerminatorLift>* found_terminator;  // null unless the scene has a terminator offset
     glm::vec3& emitted;
     glm::vec3* transmitted_direct;  // null when the scene has no rough transmission
     glm::vec3* caustic_emitted;     // ViewSamples::caustic_emission's; null when transmitted_direct is
@@ -126,6 +129,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
     p.found.push_back(sample);
+    if (p.found_terminator) p.found_terminator->push_back(terminator_lift(p.scene, s, s.geometric_normal));
 }
 
 // Follows one camera path (and returns when it ends in a view sample, is absorbed, escapes or is dropped),
@@ -280,8 +284,10 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             // Rough transmission: its own next-event estimation here, then a sampled direction on.
             const glm::vec3 t = path.throughput / probability[1];
             if (p.direct != nullptr && p.transmitted_direct != nullptr) {
-                const glm::vec3 light =
-                    t * direct_light_at(*p.direct, b, s.position, s.rounding_scale, LobeSet::transmission, p.rng, p.rays);
+                const TerminatorLift lift =
+                    p.found_terminator ? terminator_lift(p.scene, s, -s.geometric_normal) : TerminatorLift{};
+                const glm::vec3 light = t * direct_light_at(*p.direct, b, s.position, s.rounding_scale,
+                                                            LobeSet::transmission, p.rng, p.rays, {}, &lift);
                 *p.transmitted_direct += light;
                 // Its own light is a caustic one on a caustic path, or where right after translucency this surface
                 // transmits through rough refraction alone (Cycles drops that closure there).
@@ -372,6 +378,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     const int bands = (height + kBandRows - 1) / kBandRows;
     std::vector<std::vector<ViewSample>> band_samples(static_cast<size_t>(bands));
     std::vector<std::vector<Lobe>> band_lobes(static_cast<size_t>(bands));
+    const bool lifts = scene.any_terminator_offset();
+    std::vector<std::vector<TerminatorLift>> band_lifts(lifts ? static_cast<size_t>(bands) : 0);
     std::atomic<uint64_t> extra_rays{0};
     const RayTracer& tracer = scene.ray_tracer();  // built once, before the threads need it
     std::atomic<bool> cancelled{false};
@@ -385,6 +393,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             // Collected here (a band's worth of memory per thread), then copied to a vector of exactly their size.
             std::vector<ViewSample> found;
             std::vector<Lobe> found_lobes;
+            std::vector<TerminatorLift> found_lifts;
             uint64_t rays = 0;
             const int y_end = std::min(height, (band + 1) * kBandRows);
             found.reserve(static_cast<size_t>(y_end - band * kBandRows) * static_cast<size_t>(width));
@@ -415,7 +424,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                         FirstHit first;
                         const size_t before = found.size();
                         PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel),
-                                         rng, found, found_lobes, out.emission[pixel],
+                                         rng, found, found_lobes, lifts ? &found_lifts : nullptr,
+                                         out.emission[pixel],
                                          out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel],
                                          out.caustic_emission.empty() ? nullptr : &out.caustic_emission[pixel],
                                          first, {}, 1, 0, &first_hits[k], first_found[k]};
@@ -435,6 +445,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             }
             band_samples[static_cast<size_t>(band)].assign(found.begin(), found.end());
             band_lobes[static_cast<size_t>(band)] = std::move(found_lobes);
+            if (lifts) band_lifts[static_cast<size_t>(band)] = std::move(found_lifts);
             extra_rays += rays;
             control.advance(rows_done += static_cast<uint64_t>(y_end - band * kBandRows),
                             static_cast<uint64_t>(height));
@@ -449,11 +460,16 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     }
     out.samples.reserve(count);
     out.lobes.reserve(lobe_count);
+    if (lifts) out.terminator.reserve(count);
     for (size_t band = 0; band < band_samples.size(); ++band) {
         const uint32_t offset = static_cast<uint32_t>(out.lobes.size());
         for (ViewSample& sample : band_samples[band]) sample.lobe_begin += offset;
         out.samples.insert(out.samples.end(), band_samples[band].begin(), band_samples[band].end());
         out.lobes.insert(out.lobes.end(), band_lobes[band].begin(), band_lobes[band].end());
+        if (lifts) {
+            out.terminator.insert(out.terminator.end(), band_lifts[band].begin(), band_lifts[band].end());
+            std::vector<TerminatorLift>().swap(band_lifts[band]);
+        }
         std::vector<ViewSample>().swap(band_samples[band]);
         std::vector<Lobe>().swap(band_lobes[band]);
     }

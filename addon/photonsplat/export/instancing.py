@@ -25,13 +25,14 @@ class Placement:
     visibility: tuple        # (camera, shadow, indirect) ray visibility
     matrix: np.ndarray       # float64 (4, 4) object to world
     object_info: dict = None  # Object Info: colour, pass index, random (given to the core when a program reads it)
+    terminator_offset: float = 0.1  # Cycles' shadow terminator Geometry Offset (terminator_offset below)
 
     @property
     def signature(self):
         """Everything but the transform: equal signatures differ at most by a set_instance_transform."""
         keys = tuple(None if m is None else m.name_full for m in self.materials)
         info = None if self.object_info is None else tuple(sorted(self.object_info.items()))
-        return (self.object_name, self.mesh_key, keys, self.holdout, self.visibility, info)
+        return (self.object_name, self.mesh_key, keys, self.holdout, self.visibility, info, self.terminator_offset)
 
 
 def placement(instance, name=None):
@@ -41,7 +42,19 @@ def placement(instance, name=None):
     return Placement(name=name or instance_name(instance), object_name=ob.original.name_full,
                      mesh_key=mesh_key(ob), mesh_name=ob.data.name if ob.data else ob.name,
                      materials=slots, holdout=is_holdout(ob), visibility=ray_visibility(ob),
-                     matrix=camera.matrix_to_numpy(instance.matrix_world), object_info=object_info(instance))
+                     matrix=camera.matrix_to_numpy(instance.matrix_world), object_info=object_info(instance),
+                     terminator_offset=terminator_offset(ob))
+
+
+def terminator_offset(ob):
+    """Cycles' Object > Shading > Shadow Terminator > Geometry Offset (0.1 unless changed): shadow rays from
+    smooth triangles towards lights near their horizon start on the smooth surface (the core's
+    shadow_terminator.h). Blender 3.x keeps it in the Cycles add-on's object settings, 4.x on the object."""
+    for owner in (ob, getattr(ob, "cycles", None)):
+        value = getattr(owner, "shadow_terminator_geometry_offset", None)
+        if value is not None:
+            return min(max(float(value), 0.0), 1.0)
+    return 0.1
 
 
 def object_info(instance):
@@ -193,7 +206,8 @@ class GeometryTable:
             extra["object_info"] = dict(where.object_info)
         instance_id = self._core_scene.add_instance(mesh_id=mesh_id, transform=where.matrix, name=where.name,
                                                     visible_camera=camera_ray, visible_shadow=shadow,
-                                                    visible_indirect=indirect, **extra)
+                                                    visible_indirect=indirect,
+                                                    terminator_offset=where.terminator_offset, **extra)
         self.instances_by_object.setdefault(where.object_name, []).append(instance_id)
         return instance_id, triangles
 

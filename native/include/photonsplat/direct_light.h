@@ -8,6 +8,7 @@
 
 #include "photonsplat/camera.h"
 #include "photonsplat/shading.h"
+#include "photonsplat/shadow_terminator.h"
 
 namespace ps {
 
@@ -55,8 +56,10 @@ struct DirectLightSequences {
     const SampleSequence* bsdf = nullptr;
     uint32_t iteration = 0;
 };
+// `terminator`: the lift of x's shadow rays towards the set's side (shadow_terminator.h), or null for none.
 glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm::vec3& x, float rounding_scale,
-                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences = {});
+                          LobeSet set, Rng& rng, uint64_t& rays, const DirectLightSequences& sequences = {},
+                          const TerminatorLift* terminator = nullptr);
 
 // What Cycles 3.x's light samples find at a near-mirror Multiscatter GGX (Bsdf::mirror_reported_alpha): its lamps
 // seen through the lobe's clamped D (cycles3_multiscatter_mirror_eval), a dim glow around their reflection, each

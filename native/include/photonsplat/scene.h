@@ -140,6 +140,10 @@ struct Instance {
     glm::vec4 color{1.0f};            // Blender's object colour
     float pass_index = 0.0f;          // Object Index
     float random = 0.0f;              // Cycles' per-object random number in [0, 1)
+    // Cycles' shadow terminator geometry offset (Object > Shading > Shadow Terminator, 0.1 in Blender, 0 here
+    // unless set): how close to grazing a shadow ray from this instance's smooth triangles starts on the smooth
+    // surface instead of the flat one (shadow_terminator.h).
+    float terminator_offset = 0.0f;
 };
 
 // The render-space box of an instance: its mesh's object-space box, corner by corner through to_world (grown
@@ -199,6 +203,10 @@ public:
     std::shared_ptr<const WorldLight> world_light() const;
     // Object Info's colour, pass index and random number of an instance.
     void set_instance_info(uint32_t instance, const glm::vec4& color, float pass_index, float random);
+    // Instance::terminator_offset, in [0, 1].
+    void set_instance_terminator_offset(uint32_t instance, float offset);
+    // Whether some instance has a terminator offset and smooth normals: shadow rays may start lifted.
+    bool any_terminator_offset() const;
     // The id of a mesh attribute name (UV map or colour attribute) that programs and meshes refer to; names are
     // registered on first use.
     uint32_t attribute_id(const std::string& name);

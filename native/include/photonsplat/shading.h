@@ -70,6 +70,11 @@ glm::vec3 lambert_albedo(const Scene& scene, const SurfacePoint& surface, const 
 // `estimate`: light_sample where wi is a light's sample (closures.h).
 glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all,
                     MultiScatterEstimate estimate = MultiScatterEstimate::walk);
+// bsdf_eval with the sides told by the shading normal instead of the geometric one: for a light sample that
+// Cycles traces from under the triangle's horizon (shadow_terminator.h), where it evaluates the closures by the
+// shading normal alone.
+glm::vec3 bsdf_eval_shading_side(const Bsdf& b, const glm::vec3& wi, LobeSet set,
+                                 MultiScatterEstimate estimate = MultiScatterEstimate::walk);
 // The density with which bsdf_sample_set(b, set) draws wi (solid angle).
 float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
 // Only the reflection side of bsdf_eval, from a view sample's stored parts: what it receives from photons (splat.h).

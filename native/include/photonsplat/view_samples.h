@@ -11,6 +11,7 @@
 
 #include "photonsplat/camera.h"
 #include "photonsplat/closures.h"
+#include "photonsplat/shadow_terminator.h"
 
 namespace ps {
 
@@ -61,6 +62,9 @@ struct ViewSamples {
                                         // dropped, else one per part of the first hit's BSDF that ends in a sample
                                         // (shading.h: its lobes, its mirror, refraction, transparency, transmission)
     std::vector<Lobe> lobes;            // the reflection lobes of kGlossy samples (beyond the Lambert albedo)
+    // Index-aligned with samples, only where some instance has a shadow terminator offset (Scene::
+    // any_terminator_offset), else empty: the lift of each sample's shadow rays (shadow_terminator.h).
+    std::vector<TerminatorLift> terminator;
     // width × height, only where the scene has rough transmission or translucency, or a near-mirror (a Cycles 3.x
     // Multiscatter GGX near roughness 0.02), else empty: light that reached camera paths through such a surface
     // from the lights directly (its own next-event estimation), or that a near-mirror's light samples found

@@ -90,15 +90,23 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
         const LightIncidence in = c.sources.sample_incidence(l, s.position, b.ng, u1, u2, u3);
         const bool front = glm::dot(in.wi, b.ng) > 0.0f;
-        if (!front && !transmits) continue;  // light from behind a surface that does not pass it on
+        // Under the triangle's horizon but above the shading normal's: traced from the smooth surface where the
+        // object has a terminator offset (shadow_terminator.h), and evaluated by the shading normal, as Cycles.
+        const TerminatorLift lift = c.terminator_offsets ? terminator_lift(c.scene, s, b.ng) : TerminatorLift{};
+        const bool below = !front && terminator_reaches_below(lift, b.n, b.ng, in.wi);
+        if (!front && !transmits && !below) continue;  // light from behind a surface that does not pass it on
         if (!front && glm::dot(in.wi, b.ng) == 0.0f) continue;
         if (in.value == glm::vec3(0.0f)) continue;
-        const glm::vec3 f = bsdf_eval(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate());
+        const glm::vec3 f = below ? bsdf_eval_shading_side(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate())
+                                  : bsdf_eval(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate());
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
-        const glm::vec3 side = front ? b.ng : -b.ng;
-        const ShadowSegment segment =
-            shadow_segment(s.position, offset_ray_origin(s.position, side, s.rounding_scale), in);
+        const glm::vec3 side = front || below ? b.ng : -b.ng;
+        const glm::vec3 start =
+            !c.terminator_offsets ? s.position
+            : side == b.ng        ? terminator_origin(s.position, lift, b.n, side, in.wi)
+                                  : terminator_origin(s.position, terminator_lift(c.scene, s, side), b.n, side, in.wi);
+        const ShadowSegment segment = shadow_segment(s.position, offset_ray_origin(start, side, s.rounding_scale), in);
         const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
         const float pick = clearcoat ? c.sources.cycles_pick_probability(l) : 1.0f;

@@ -21,6 +21,7 @@ struct PathTracerContext {
     std::vector<uint8_t> photon_caustics;    // per source: its L S+ D paths belong to the photons
     int max_bounces;
     bool transparency = false;               // scene_has_transparency: shadow rays look through transparent closures
+    bool terminator_offsets = false;         // Scene::any_terminator_offset: shadow rays may start lifted
 };
 
 // Per-thread tallies, added into the render's counters once per pass.

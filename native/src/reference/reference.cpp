@@ -97,7 +97,8 @@ ReferenceResult render_reference(const Scene& scene, const Camera& world_camera,
         control.begin_stage("scene", 0.0, 0.0);
         report_scene(scene, stats);
         const LightSources sources(scene);
-        PathTracerContext context{scene, sources, nullptr, {}, settings.max_bounces, scene_has_transparency(scene)};
+        PathTracerContext context{scene, sources, nullptr, {}, settings.max_bounces, scene_has_transparency(scene),
+                                  scene.any_terminator_offset()};
         bool photon_sources = false;
         for (size_t l = 0; l < sources.size(); ++l) {
             const bool photons = settings.caustic_photons > 0 && caustics_by_photons(sources, l);
