@@ -382,6 +382,48 @@ BsdfSample sample_clearcoat_branch(const Bsdf& b, float u1, float u2) {
     return out;
 }
 
+bool narrow_lobe_branches(const Lobe& lobe) {
+    constexpr float kNarrowAlpha = 0.01f;
+    return lobe.kind == ClosureKind::reflection && lobe.distribution != Distribution::gtr1 &&
+           std::max(lobe.alpha_x, lobe.alpha_y) <= kNarrowAlpha;
+}
+
+bool bsdf_has_narrow_lobe(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (narrow_lobe_branches(b.lobes[k])) return true;
+    return false;
+}
+
+BsdfSample sample_narrow_lobe_branch(const Bsdf& b, float u0, float u1, float u2) {
+    BsdfSample out;
+    float weights[kMaxLobes] = {}, total = 0.0f;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (!narrow_lobe_branches(b.lobes[k])) continue;
+        const float w = lobe_sampling_weight(b.lobes[k], b.n, b.wo);
+        weights[k] = std::isfinite(w) ? std::max(w, 0.0f) : 0.0f;
+        total += weights[k];
+    }
+    if (!(total > 0.0f)) return out;
+    int chosen = -1;
+    float pick = u0 * total;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (!(weights[k] > 0.0f)) continue;
+        chosen = k;
+        if (pick < weights[k]) break;
+        pick -= weights[k];
+    }
+    const LobeSample s = lobe_sample(b.lobes[chosen], b.n, b.wo, u1, u2);
+    if (!(s.pdf > 0.0f) || !(glm::dot(s.direction, b.ng) > 0.0f)) return out;
+    const glm::vec3 weight = s.f * (std::fabs(glm::dot(s.direction, b.n)) * total / (s.pdf * weights[chosen]));
+    if (!std::isfinite(weight.x + weight.y + weight.z) || is_zero(weight)) return out;
+    out.kind = ScatterKind::lobes;
+    out.glossy = true;
+    out.direction = s.direction;
+    out.weight = glm::max(weight, glm::vec3(0.0f));
+    out.pdf = s.pdf * weights[chosen] / total;
+    return out;
+}
+
 ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi) {
     const LabelSums sums =
         label_sums(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, b.selection_floor, glm::dot(wi, b.ng) > 0.0f);

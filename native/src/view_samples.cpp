@@ -117,12 +117,18 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     sample.depth = p.first.depth;
     sample.lobe_begin = static_cast<uint32_t>(p.found_lobes.size());
     sample.lobe_count = 0;
+    sample.branched_lobes = 0;
     bool diffuse_part = lambert != glm::vec3(0.0f);
     for (int k = 0; b != nullptr && k < b->lobe_count; ++k) {
-        if (is_transmission(b->lobes[k])) continue;
+        if (is_transmission(b->lobes[k]) || narrow_lobe_branches(b->lobes[k])) continue;
         p.found_lobes.push_back(b->lobes[k]);
         ++sample.lobe_count;
         diffuse_part = diffuse_part || is_diffuse_reflection(b->lobes[k]);
+    }
+    for (int k = 0; b != nullptr && k < b->lobe_count; ++k) {
+        if (!narrow_lobe_branches(b->lobes[k])) continue;
+        p.found_lobes.push_back(b->lobes[k]);
+        ++sample.branched_lobes;
     }
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
     if (path.depth == 0 && b != nullptr) sample.selection_floor = defensive_floor(*b);
@@ -313,6 +319,15 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             const float keep = std::min(1.0f, std::max({cc.weight.x, cc.weight.y, cc.weight.z}));
             if (cc.kind == ScatterKind::lobes && u_keep < keep)
                 go_on(cc.direction, cc.weight / (keep * probability[0]), false, true);
+        }
+        if (take[0] && bsdf_has_narrow_lobe(b)) {
+            // A lobe too narrow for photons (shading.h: narrow_lobe_branches), as a clearcoat's: Russian roulette by
+            // its weight, and the lights it meets are the view sample's direct light's.
+            const float u0 = p.rng.uniform(), u1 = p.rng.uniform(), u2 = p.rng.uniform(), u_keep = p.rng.uniform();
+            const BsdfSample branch = sample_narrow_lobe_branch(b, u0, u1, u2);
+            const float keep = std::min(1.0f, std::max({branch.weight.x, branch.weight.y, branch.weight.z}));
+            if (branch.kind == ScatterKind::lobes && u_keep < keep)
+                go_on(branch.direction, branch.weight / (keep * probability[0]), false, true);
         }
         if (take[2]) {
             // A near-mirror's own light samples (Cycles 3.x's Multiscatter GGX near roughness 0.02): the glow of

@@ -49,7 +49,10 @@ struct ViewSample {
     float depth;               // view depth of the FIRST hit of the pixel's camera ray (for cluster keys)
     float rounding_scale;      // SurfacePoint::rounding_scale, for rays leaving the sample (offset_ray_origin)
     uint32_t lobe_begin;       // kGlossy samples: its other reflection lobes are ViewSamples::lobes[lobe_begin, +count)
-    uint32_t lobe_count;
+    uint16_t lobe_count;
+    // Narrow lobes (shading.h: narrow_lobe_branches) right after those: the sample's direct light evaluates them,
+    // its splat does not (the camera path followed them as a branch of its own).
+    uint16_t branched_lobes;
     // Cycles' defensive floor of the parts' sampling weights at the camera's first hit (defensive_floor in
     // shading.h; 0 elsewhere): how Cycles labels the scatter here, for the Caustics output (LabelShare).
     float selection_floor;
