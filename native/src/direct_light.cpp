@@ -373,6 +373,8 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
         }
         uint64_t rays = 0;
         Bsdf b;
+        auto lift = std::lower_bound(samples.terminator.begin(), samples.terminator.end(), range.begin(),
+                                     [](const ViewSamples::SampleLift& l, size_t i) { return l.sample < i; });
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
             // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
@@ -386,10 +388,12 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                 bsdf_points.emplace(settings.sequence_seed, key, SampleSequence::kBsdfStream);
                 sequences = {&*light_points, &*bsdf_points, settings.iteration};
             }
-            const TerminatorLift* lift = samples.terminator.size() == samples.samples.size() ? &samples.terminator[i]
-                                                                                               : nullptr;
+            // The samples' lifts are in index order: step along them with i.
+            while (lift != samples.terminator.end() && lift->sample < i) ++lift;
+            const TerminatorLift* terminator =
+                lift != samples.terminator.end() && lift->sample == i ? &lift->lift : nullptr;
             out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                    LobeSet::reflection, rng, rays, sequences, lift);
+                                                    LobeSet::reflection, rng, rays, sequences, terminator);
         }
         shadow_rays += rays;
         control.advance(samples_done += range.size(), samples.samples.size());

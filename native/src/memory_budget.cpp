@@ -216,7 +216,7 @@ void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings,
     // caustic part, caustic_emission: a vec3 a pixel each) and the samples' terminator lifts, known once traced.
     const double extra = double(lobes) * double(sizeof(Lobe)) +
                          (transmitted_direct ? 2.0 * double(pixels) * sizeof(glm::vec3) : 0.0) +
-                         double(terminator_lifts) * double(sizeof(TerminatorLift));
+                         double(terminator_lifts) * double(sizeof(ViewSamples::SampleLift));
     if (extra > 0.0) budget.reserve("view_samples", extra, "resolution");
     if (samples <= pixels) return;
     // Each per-sample structure grows by what its prediction for `samples` adds to the one for `pixels`, recorded

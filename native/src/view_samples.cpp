@@ -27,7 +27,7 @@ namespace ps {
 
 size_t ViewSamples::bytes() const {
     return samples.capacity() * sizeof(ViewSample) + lobes.capacity() * sizeof(Lobe) +
-           terminator.capacity() * sizeof(TerminatorLift) + transmitted_direct.capacity() * sizeof(glm::vec3) +
+           terminator.capacity() * sizeof(SampleLift) + transmitted_direct.capacity() * sizeof(glm::vec3) +
            caustic_emission.capacity() * sizeof(glm::vec3) +
            emission.capacity() * sizeof(glm::vec3) +
            alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
@@ -75,7 +75,8 @@ struct PixelPaths {
     Rng& rng;
     std::vector<ViewSample>& found;
     std::vector<Lobe>& found_lobes;
-    std::vector<TerminatorLift>* found_terminator;  // null unless the scene has a terminator offset
+    // The lifts of found's samples that have one (index within found); null unless the scene has an offset.
+    std::vector<ViewSamples::SampleLift>* found_terminator;
     glm::vec3& emitted;
     glm::vec3* transmitted_direct;  // null when the scene has no rough transmission
     glm::vec3* caustic_emitted;     // ViewSamples::caustic_emission's; null when transmitted_direct is
@@ -135,7 +136,10 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
     p.found.push_back(sample);
-    if (p.found_terminator) p.found_terminator->push_back(terminator_lift(p.scene, s, s.geometric_normal));
+    if (p.found_terminator) {
+        const TerminatorLift lift = terminator_lift(p.scene, s, s.geometric_normal);
+        if (lift.cutoff > 0.0f) p.found_terminator->push_back({static_cast<uint32_t>(p.found.size() - 1), lift});
+    }
 }
 
 // Follows one camera path (and returns when it ends in a view sample, is absorbed, escapes or is dropped),
@@ -394,7 +398,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     std::vector<std::vector<ViewSample>> band_samples(static_cast<size_t>(bands));
     std::vector<std::vector<Lobe>> band_lobes(static_cast<size_t>(bands));
     const bool lifts = scene.any_terminator_offset();
-    std::vector<std::vector<TerminatorLift>> band_lifts(lifts ? static_cast<size_t>(bands) : 0);
+    std::vector<std::vector<ViewSamples::SampleLift>> band_lifts(lifts ? static_cast<size_t>(bands) : 0);
     std::atomic<uint64_t> extra_rays{0};
     const RayTracer& tracer = scene.ray_tracer();  // built once, before the threads need it
     std::atomic<bool> cancelled{false};
@@ -408,7 +412,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             // Collected here (a band's worth of memory per thread), then copied to a vector of exactly their size.
             std::vector<ViewSample> found;
             std::vector<Lobe> found_lobes;
-            std::vector<TerminatorLift> found_lifts;
+            std::vector<ViewSamples::SampleLift> found_lifts;
             uint64_t rays = 0;
             const int y_end = std::min(height, (band + 1) * kBandRows);
             found.reserve(static_cast<size_t>(y_end - band * kBandRows) * static_cast<size_t>(width));
@@ -475,15 +479,21 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     }
     out.samples.reserve(count);
     out.lobes.reserve(lobe_count);
-    if (lifts) out.terminator.reserve(count);
+    size_t lift_count = 0;
+    for (const auto& band : band_lifts) lift_count += band.size();
+    out.terminator.reserve(lift_count);
     for (size_t band = 0; band < band_samples.size(); ++band) {
         const uint32_t offset = static_cast<uint32_t>(out.lobes.size());
+        const uint32_t first_sample = static_cast<uint32_t>(out.samples.size());
         for (ViewSample& sample : band_samples[band]) sample.lobe_begin += offset;
         out.samples.insert(out.samples.end(), band_samples[band].begin(), band_samples[band].end());
         out.lobes.insert(out.lobes.end(), band_lobes[band].begin(), band_lobes[band].end());
         if (lifts) {
-            out.terminator.insert(out.terminator.end(), band_lifts[band].begin(), band_lifts[band].end());
-            std::vector<TerminatorLift>().swap(band_lifts[band]);
+            for (ViewSamples::SampleLift lift : band_lifts[band]) {
+                lift.sample += first_sample;
+                out.terminator.push_back(lift);
+            }
+            std::vector<ViewSamples::SampleLift>().swap(band_lifts[band]);
         }
         std::vector<ViewSample>().swap(band_samples[band]);
         std::vector<Lobe>().swap(band_lobes[band]);

@@ -106,8 +106,14 @@ TEST(ShadowTerminator, ALowPolySphereIsLitToItsShadingTerminator) {
     };
     const test::DirectView with = render(0.1f), without = render(0.0f);
     ASSERT_EQ(with.samples.samples.size(), without.samples.samples.size());
-    ASSERT_EQ(with.samples.terminator.size(), with.samples.samples.size());
-    EXPECT_TRUE(without.samples.terminator.empty());  // nothing allocated where no instance has an offset
+    // Lifts are kept for the sphere's samples only, in index order; none where no instance has an offset.
+    ASSERT_FALSE(with.samples.terminator.empty());
+    EXPECT_LE(with.samples.terminator.size(), with.samples.samples.size());
+    for (size_t k = 0; k < with.samples.terminator.size(); ++k) {
+        ASSERT_LT(with.samples.terminator[k].sample, with.samples.samples.size());
+        if (k > 0) EXPECT_GT(with.samples.terminator[k].sample, with.samples.terminator[k - 1].sample);
+    }
+    EXPECT_TRUE(without.samples.terminator.empty());
     double gained = 0.0, total = 0.0;
     int lit_beyond_facet = 0;
     for (size_t i = 0; i < with.samples.samples.size(); ++i) {

@@ -65,9 +65,13 @@ struct ViewSamples {
                                         // dropped, else one per part of the first hit's BSDF that ends in a sample
                                         // (shading.h: its lobes, its mirror, refraction, transparency, transmission)
     std::vector<Lobe> lobes;            // the reflection lobes of kGlossy samples (beyond the Lambert albedo)
-    // Index-aligned with samples, only where some instance has a shadow terminator offset (Scene::
-    // any_terminator_offset), else empty: the lift of each sample's shadow rays (shadow_terminator.h).
-    std::vector<TerminatorLift> terminator;
+    // The lift of the shadow rays of the samples that have one (shadow_terminator.h: on a smooth triangle of an
+    // instance with a terminator offset), by sample index, in increasing order; empty where none has.
+    struct SampleLift {
+        uint32_t sample;
+        TerminatorLift lift;
+    };
+    std::vector<SampleLift> terminator;
     // width × height, only where the scene has rough transmission or translucency, or a near-mirror (a Cycles 3.x
     // Multiscatter GGX near roughness 0.02), else empty: light that reached camera paths through such a surface
     // from the lights directly (its own next-event estimation), or that a near-mirror's light samples found
