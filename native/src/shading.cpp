@@ -252,8 +252,10 @@ bool is_diffuse_reflection(const Lobe& l) {
            l.kind == ClosureKind::velvet;
 }
 
-glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate) {
-    const bool above = glm::dot(wi, b.ng) > 0.0f;
+namespace {
+
+// The set's parts for wi on the reflection side (`above`) or the transmission side of the surface.
+glm::vec3 eval_on_side(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate, bool above) {
     if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
     if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
     if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
@@ -263,15 +265,14 @@ glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatte
     return f;
 }
 
+}  // namespace
+
+glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate) {
+    return eval_on_side(b, wi, set, estimate, glm::dot(wi, b.ng) > 0.0f);
+}
+
 glm::vec3 bsdf_eval_shading_side(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate) {
-    const bool above = glm::dot(wi, b.n) > 0.0f;
-    if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
-    if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
-    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
-    glm::vec3 f(0.0f);
-    for (int k = 0; k < b.lobe_count; ++k)
-        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo).f;
-    return f;
+    return eval_on_side(b, wi, set, estimate, glm::dot(wi, b.n) > 0.0f);
 }
 
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
