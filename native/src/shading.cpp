@@ -172,7 +172,9 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
 
     // The view-dependent factors, once per hit (Cycles evaluates Fresnel and Layer Weight at the shading point).
     float factor[kMaxFactors];
-    const float cos_no = std::clamp(glm::dot(surface.shading_normal, wo), 0.0f, 1.0f);
+    // Fresnel and Layer Weight read Cycles' sd->N, untilted (a program's normal where it makes one).
+    const glm::vec3& factor_normal = m.program_normal ? surface.shading_normal : surface.smooth_normal;
+    const float cos_no = std::clamp(glm::dot(factor_normal, wo), 0.0f, 1.0f);
     for (size_t j = 0; j < m.factors.size(); ++j) factor[j] = evaluate_factor(m.factors[j], cos_no, !surface.entering);
 
     for (size_t ci = 0; ci < closure_count; ++ci) {

@@ -18,7 +18,9 @@ enum class ShaderRay : uint8_t { camera, reflected, shadow, photon };
 struct SurfacePoint {
     glm::vec3 position;
     glm::vec3 geometric_normal;  // unit, facing the side the ray came from
-    glm::vec3 shading_normal;    // unit, interpolated, on the same side as geometric_normal
+    glm::vec3 shading_normal;    // unit, the closures' normal: the interpolated one (or a program's), tilted as
+                                 // Cycles 3.x tilts it where the view's mirror image would fall below the triangle
+                                 // (ensure_valid_reflection); on the same side as geometric_normal
     bool entering;               // the ray hit the front face (the triangle's winding normal faced the ray)
     const Material* material;
     glm::vec2 uv;                // the mesh's UV here (0 without UVs), where the material's textures are looked up
@@ -29,8 +31,9 @@ struct SurfacePoint {
     uint32_t instance = 0, triangle = 0;
     glm::vec2 bary{0.0f};        // the hit's barycentrics (u, v of the 2nd and 3rd corners)
     float distance = 0.0f;       // along the ray that found it
-    glm::vec3 smooth_normal{0.0f};  // the interpolated normal before a program's Bump or Normal Map (= shading_normal
-                                    // for materials without one), on the side of geometric_normal
+    glm::vec3 smooth_normal{0.0f};  // the interpolated normal (Cycles' sd->N), untilted, before a program's Bump or
+                                    // Normal Map: what Fresnel, Layer Weight and the programs read; on the side of
+                                    // geometric_normal
     ShaderRay ray_kind = ShaderRay::camera;  // what arrived, for Light Path nodes
 };
 
