@@ -89,6 +89,20 @@ def enable_nodes(id_block):
         id_block.use_nodes = True
 
 
+def single_node_material(name, node_type, **inputs):
+    """A material whose surface is one shader node of `node_type` (a bl_idname) with the given input values
+    (keyword names are the inputs' names, spaces as underscores)."""
+    material = bpy.data.materials.new(name)
+    enable_nodes(material)
+    tree = material.node_tree
+    tree.nodes.clear()
+    node = tree.nodes.new(node_type)
+    for key, value in inputs.items():
+        node.inputs[key.replace("_", " ")].default_value = value
+    tree.links.new(node.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    return material
+
+
 def uniform_world(scene, color=(1.0, 1.0, 1.0), strength=1.0):
     """A new world of constant colour x strength (a Background node) for `scene`; returns it."""
     world = bpy.data.worlds.new("Uniform")

@@ -7,7 +7,7 @@ import math
 import bpy
 import numpy as np
 
-from blender_helpers import render_pixels, use_cycles, use_photonsplat
+from blender_helpers import render_pixels, single_node_material, use_cycles, use_photonsplat
 
 
 def low_poly_sphere_in_sunlight(scene):
@@ -19,14 +19,7 @@ def low_poly_sphere_in_sunlight(scene):
     # tests in the same session may leave elsewhere (the sphere stayed flat under 4.5 in the suite).
     sphere.data.polygons.foreach_set("use_smooth", [True] * len(sphere.data.polygons))
     sphere.data.update()
-    material = bpy.data.materials.new("White")
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
-    tree.links.new(diffuse.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    sphere.data.materials.append(material)
+    sphere.data.materials.append(single_node_material("White", "ShaderNodeBsdfDiffuse", Color=(0.8, 0.8, 0.8, 1.0)))
     sun = bpy.data.lights.new("Sun", 'SUN')
     sun.energy, sun.angle = 3.0, 0.0
     sun_object = bpy.data.objects.new("Sun", sun)

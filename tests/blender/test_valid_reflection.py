@@ -8,7 +8,7 @@ import math
 import bpy
 import numpy as np
 
-from blender_helpers import render_pixels, use_cycles, use_photonsplat
+from blender_helpers import render_pixels, single_node_material, use_cycles, use_photonsplat
 
 
 def smooth_mirror_on_a_floor(scene):
@@ -16,29 +16,15 @@ def smooth_mirror_on_a_floor(scene):
     light, seen from the side a little above the floor (a third of the image is the sphere)."""
     bpy.ops.mesh.primitive_plane_add(size=20.0)
     floor = bpy.context.active_object
-    floor_material = bpy.data.materials.new("Floor")
-    floor_material.use_nodes = True
-    tree = floor_material.node_tree
-    tree.nodes.clear()
-    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (0.8, 0.6, 0.3, 1.0)
-    tree.links.new(diffuse.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    floor.data.materials.append(floor_material)
+    floor.data.materials.append(single_node_material("Floor", "ShaderNodeBsdfDiffuse", Color=(0.8, 0.6, 0.3, 1.0)))
 
     bpy.ops.mesh.primitive_ico_sphere_add(radius=1.0, subdivisions=1, location=(0.0, 0.0, 1.0))
     sphere = bpy.context.active_object
     # Smooth through the data (not bpy.ops.object.shade_smooth, which acts on the context's selection).
     sphere.data.polygons.foreach_set("use_smooth", [True] * len(sphere.data.polygons))
     sphere.data.update()
-    mirror = bpy.data.materials.new("Mirror")
-    mirror.use_nodes = True
-    tree = mirror.node_tree
-    tree.nodes.clear()
-    glossy = tree.nodes.new("ShaderNodeBsdfGlossy")
-    glossy.inputs["Color"].default_value = (0.9, 0.9, 0.9, 1.0)
-    glossy.inputs["Roughness"].default_value = 0.0
-    tree.links.new(glossy.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    sphere.data.materials.append(mirror)
+    sphere.data.materials.append(
+        single_node_material("Mirror", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0), Roughness=0.0))
 
     light = bpy.data.lights.new("Area", 'AREA')
     light.energy, light.size = 800.0, 2.0
