@@ -62,7 +62,6 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.lambert = s.albedo;
     // The splat's lobes and the narrow ones after them (view_samples.h): direct light takes them all.
     b.lobe_count = static_cast<int>(std::min<uint32_t>(uint32_t(s.lobe_count) + s.branched_lobes, kMaxLobes));
-    if (!(s.flags & kGlossy) && s.branched_lobes == 0) b.lobe_count = 0;
     for (int k = 0; k < b.lobe_count; ++k) b.lobes[k] = lobes[s.lobe_begin + static_cast<uint32_t>(k)];
     b.selection_floor = 0.0f;
     if (!(s.flags & kViaSpecular)) choose_defensively(b);  // the camera's first hit; its reflection parts only
