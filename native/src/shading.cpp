@@ -386,7 +386,7 @@ BsdfSample sample_clearcoat_branch(const Bsdf& b, float u1, float u2) {
 }
 
 bool narrow_lobe_branches(const Lobe& lobe) {
-    constexpr float kNarrowAlpha = 0.01f;
+    constexpr float kNarrowAlpha = 0.04f;
     return lobe.kind == ClosureKind::reflection && lobe.distribution != Distribution::gtr1 &&
            std::max(lobe.alpha_x, lobe.alpha_y) <= kNarrowAlpha;
 }

@@ -122,11 +122,12 @@ bool bsdf_has_clearcoat(const Bsdf& b);
 // Cycles (differential seeds 89, 99, 102). A rougher clearcoat stays in the splat, with its own sampler's density.
 bool clearcoat_branches(const Lobe& lobe);
 bool bsdf_has_branching_clearcoat(const Bsdf& b);
-// A reflection lobe other than the clearcoat too narrow for photons to resolve (α ≤ 0.01, roughness 0.1 for GGX):
+// A reflection lobe other than the clearcoat too narrow for photons to resolve (α ≤ 0.04, roughness 0.2 for GGX):
 // a view sample's splat weighs each photon by the lobe at the photon's own direction, which for a lobe this narrow
-// is next to nothing for nearly every photon and thousands of times the average for the few within it (seed 38 of
-// the generated scenes: a metal cylinder of roughness 0.06 had pixels at 0.04 and 12 times Cycles' after 16 s,
-// its block 2.6 and 1.5 times Cycles' at 4 and 16 s). The camera path follows such a lobe as a branch of its own
+// is next to nothing for nearly every photon and hundreds to thousands of times the average for the few within it
+// (seeds of the generated scenes: 38, a metal cylinder of roughness 0.06, had pixels at 0.04 and 12 times Cycles'
+// after 16 s; 198, a Beckmann cylinder of roughness 0.146, α 0.021, its block at 0.30 and 0.62 of Cycles after 4
+// and 16 s, until the bound went from α 0.01 to 0.04). The camera path follows such a lobe as a branch of its own
 // (view_samples.cpp, sample_narrow_lobe_branch), the view sample's splat leaves it out, and its direct light keeps
 // it (light samples and the BSDF's directions, which draw it too).
 bool narrow_lobe_branches(const Lobe& lobe);
