@@ -42,11 +42,12 @@ constexpr int kMaxSpecularCrossings = 4;  // mirrors and glass a probe passes th
 
 // What a probe finds of the surface photons land on: along the segment from `start` in direction `down` (length
 // `length`), the first surface that stores photons (one with a closure that reflects other than a delta: diffuse,
-// glossy, rough glass's reflection), if it faces within the splat's tolerance of `normal`. Surfaces that only
-// pass light on (mirrors, sharp glass, transparency, translucency) are passed through: the photons they send on
-// land behind them. A surface that both transmits and reflects (a mix of translucent and diffuse) stops the
-// probe: photons land on it, and its own view samples are probed (seed 150 of the differential scenes: passing
-// through such a cylinder's wall found nothing, and its outside was estimated 2-2.6x too bright). Returns the
+// glossy, rough glass's reflection; or a translucent one, which stores caustic photons for the far sides of camera
+// paths through it), if it faces within the splat's tolerance of `normal`. Surfaces that only pass light on (mirrors,
+// sharp glass, rough refraction, transparency) are passed through: the photons they send on land behind them. A
+// surface that both transmits and reflects stops the probe: photons land on it, and its own view samples are
+// probed (seed 150 of the differential scenes: passing through a translucent and diffuse cylinder's wall found
+// nothing, and its outside was estimated 2-2.6x too bright). Returns the
 // cosine between that surface's normal and `normal` (0 when the probe finds no such surface) and the distance
 // along the segment.
 struct ProbeHit {
@@ -62,7 +63,7 @@ ProbeHit probe_from(const Scene& scene, const Ray& ray, Hit hit, float length, c
         const Instance& instance = scene.instances()[hit.instance];
         const MeshData& mesh = scene.meshes()[instance.mesh];
         const Material& material = scene.materials()[mesh.materials[hit.triangle]];
-        if (material.reflects) {
+        if (material.reflects || material.translucent) {
             const glm::vec3& p0 = mesh.positions[mesh.indices[3 * size_t(hit.triangle)]];
             const glm::vec3& p1 = mesh.positions[mesh.indices[3 * size_t(hit.triangle) + 1]];
             const glm::vec3& p2 = mesh.positions[mesh.indices[3 * size_t(hit.triangle) + 2]];

@@ -148,7 +148,7 @@ void fold_constant_outputs(Material& m) {
 }
 
 void finalize_material(Material& m) {
-    m.has_delta = m.has_lobes = m.directional = m.transmits = m.reflects = m.transparent = false;
+    m.has_delta = m.has_lobes = m.directional = m.transmits = m.reflects = m.translucent = m.transparent = false;
     m.anisotropic = m.textured = false;
     m.lambert_only = !m.holdout;
     m.programmed = !m.program.empty();
@@ -178,6 +178,7 @@ void finalize_material(Material& m) {
         if (!c.is_delta() && !(c.kind == ClosureKind::diffuse && c.roughness == 0.0f)) m.directional = true;
         if (c.transmits()) m.transmits = true;
         if (!c.is_delta() && !c.transmits()) m.reflects = true;
+        if (c.kind == ClosureKind::translucent) m.translucent = true;
         if (c.kind == ClosureKind::transparent) m.transparent = true;
         if (!c.is_delta() && c.alpha_x != c.alpha_y &&
             (c.kind == ClosureKind::reflection || c.kind == ClosureKind::refraction))
@@ -187,7 +188,8 @@ void finalize_material(Material& m) {
             m.lambert_only = false;
     }
     if (m.programmed) m.textured = true;  // programs read UVs, attributes and the rest of the hit
-    if (m.holdout) m.has_delta = m.has_lobes = m.directional = m.transmits = m.reflects = m.transparent = false;
+    if (m.holdout)
+        m.has_delta = m.has_lobes = m.directional = m.transmits = m.reflects = m.translucent = m.transparent = false;
 }
 
 }  // namespace ps

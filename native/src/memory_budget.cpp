@@ -211,10 +211,11 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
 }
 
 void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples,
-                           size_t lobes, bool transmitted_direct, size_t terminator_lifts) {
+                           size_t lobes, bool transmitted_direct, size_t terminator_lifts, size_t far_sides) {
     // The lobes of glossy samples, the light that came through rough transmission (transmitted_direct and its
-    // caustic part, caustic_emission: a vec3 a pixel each) and the samples' terminator lifts, known once traced.
-    const double extra = double(lobes) * double(sizeof(Lobe)) +
+    // caustic part, caustic_emission: a vec3 a pixel each), the samples' terminator lifts and the far sides of
+    // translucent surfaces, known once traced.
+    const double extra = double(lobes) * double(sizeof(Lobe)) + double(far_sides) * double(sizeof(ViewSample)) +
                          (transmitted_direct ? 2.0 * double(pixels) * sizeof(glm::vec3) : 0.0) +
                          double(terminator_lifts) * double(sizeof(ViewSamples::SampleLift));
     if (extra > 0.0) budget.reserve("view_samples", extra, "resolution");

@@ -156,10 +156,16 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // Light that leaves its lamp's first surface is what Cycles finds there by sampling the lamp: a Multiscatter
         // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h).
         if (direct) b.sampled_estimate = scene.multiscatter_light_estimate();
-        if (!direct && bsdf_has(b, LobeSet::reflection)) {
+        // Stored where view samples receive it: on a surface that reflects it, and, where it is a caustic one, on a
+        // translucent surface, whose far side gathers those (view_samples.h).
+        const bool reflected = bsdf_has(b, LobeSet::reflection);
+        const bool far_side = only_specular_so_far && translucent_albedo(b) != glm::vec3(0.0f);
+        if (!direct && (reflected || far_side)) {
             const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u);
+                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
+                                   (far_side ? static_cast<uint32_t>(kFarSidePhoton) : 0u) |
+                                   (reflected ? 0u : static_cast<uint32_t>(kFarSideOnly));
             Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
                           flags, {}};
             kept.set_shares(photon);

@@ -120,6 +120,62 @@ void correct_boundaries(const Scene& scene, const ViewSamples& samples, const Sp
         for (size_t i = 0; i < coverage.size(); ++i) (*light)[i] /= coverage[i];
 }
 
+// The photons the view samples' splat takes: all but those stored for the far sides of translucent surfaces
+// alone (kFarSideOnly, photons.h), taken out of the map in place.
+void keep_reflected_photons(PhotonMap& photons) {
+    std::vector<Photon>& v = photons.photons;
+    v.erase(std::remove_if(v.begin(), v.end(), [](const Photon& p) { return (p.flags & kFarSideOnly) != 0; }),
+            v.end());
+}
+
+// The light of the far sides of translucent surfaces (ViewSamples::far_side): the caustic photons stored on them
+// (kFarSidePhoton), gathered from a hashed grid (splat/gather.cpp) whatever the settings' method, exact like the
+// splat of the view samples, with the same radius and boundary correction. Empty where no camera path scattered
+// through translucency. Its structures are reserved in the budget as one, "far_side_gather".
+std::vector<glm::vec3> gather_far_sides(const Scene& scene, const ViewSamples& samples, const Camera& camera,
+                                        int threads, const PhotonMap& photons, const RenderSettings& settings,
+                                        const SplatParams& params, uint64_t seed, MemoryBudget& budget,
+                                        RenderControl& control, Stats& stats) {
+    if (samples.far_side.empty()) return {};
+    StageTimer timer(stats, "far_side_gather");
+    size_t count = 0;
+    for (const Photon& p : photons.photons) count += (p.flags & kFarSidePhoton) != 0 ? 1 : 0;
+    RenderSettings gather_settings = settings;
+    gather_settings.method = SplatMethod::gather;
+    const std::unique_ptr<Splatter> gather = make_splatter(gather_settings);
+    ViewSamples sides;
+    sides.width = samples.width;
+    sides.height = samples.height;
+    sides.origin = samples.origin;
+    const size_t n = samples.far_side.size();
+    const SplatFrame frame{sides, camera, nullptr, 0, threads};
+    double predicted = double(count) * sizeof(Photon) + double(n) * (sizeof(ViewSample) + sizeof(glm::vec3)) +
+                       predict_kernel_coverage_bytes(n) + double(samples.width) * samples.height * sizeof(uint32_t);
+    for (const auto& [structure, bytes] : gather->predict_memory(frame, count, params).fixed) predicted += bytes;
+    budget.reserve("far_side_gather", predicted, "resolution");
+    sides.samples = samples.far_side;
+    PhotonMap caustic;
+    caustic.emitted = photons.emitted;
+    caustic.aimed = photons.aimed;
+    caustic.photons.reserve(count);
+    for (const Photon& p : photons.photons)
+        if (p.flags & kFarSidePhoton) caustic.photons.push_back(p);
+    Stats own;  // the gather's counters and bytes, apart from the splat's of the same names
+    SplatEstimate light = gather->splat(frame, caustic, params, control, own);
+    if (settings.boundary_correction && !caustic.photons.empty()) {
+        const std::vector<float> coverage = kernel_coverage(scene, sides, params, seed, control, own);
+        for (size_t i = 0; i < n; ++i) light.radiance[i] /= coverage[i];
+    }
+    double measured = double(caustic.photons.capacity()) * sizeof(Photon) +
+                      double(sides.samples.capacity()) * sizeof(ViewSample) +
+                      double(light.radiance.capacity()) * sizeof(glm::vec3);
+    for (const auto& [structure, bytes] : own.bytes) measured += bytes;
+    stats.bytes["far_side_gather"] = measured;
+    stats.counters["far_side_samples"] += double(n);
+    stats.counters["far_side_photons"] += double(count);
+    return std::move(light.radiance);
+}
+
 // Runs body(first, last) over [0, pixels) in blocks, in parallel.
 template <typename Body>
 void for_pixel_blocks(size_t pixels, const Body& body) {
@@ -149,7 +205,7 @@ std::vector<float> pixel_sums(const ViewSamples& samples, const std::vector<glm:
 // Stage 7: the film's outputs from the view samples and the light at them.
 Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& direct,
                   const std::vector<glm::vec3>& indirect, const std::vector<glm::vec3>* caustics,
-                  const RenderSettings& settings, Stats& stats) {
+                  const std::vector<glm::vec3>& far_sides, const RenderSettings& settings, Stats& stats) {
     const size_t pixels = static_cast<size_t>(samples.width) * samples.height;
     Film film(samples.width, samples.height, requested_outputs(settings));
     std::vector<float> emission(pixels * 3, 0.0f);
@@ -172,6 +228,12 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
         for (size_t p = 0; p < pixels; ++p)
             for (int c = 0; c < 3; ++c) direct_image[3 * p + c] += samples.transmitted_direct[p][c];
     std::vector<float> indirect_image = pixel_sums(samples, indirect, pixels);
+    // The far sides' caustic light (gather_far_sides), in pixel order.
+    const auto add_far_sides = [&](std::vector<float>& image) {
+        for (size_t i = 0; i < far_sides.size(); ++i)
+            for (int c = 0; c < 3; ++c) image[3 * samples.far_side[i].pixel + c] += far_sides[i][c];
+    };
+    add_far_sides(indirect_image);
     std::vector<float>& rgba = film[FilmOutput::combined];
     for_pixel_blocks(pixels, [&](size_t first, size_t last) {
         for (size_t p = first; p < last; ++p) {
@@ -195,6 +257,9 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
         }
         for (size_t p = 0; p < samples.caustic_emission.size(); ++p)
             for (int c = 0; c < 3; ++c) image[3 * p + c] += samples.caustic_emission[p][c];
+        // Cycles' Caustics toggles remove it whole: it reached a diffuse-labelled scatter (translucency) through
+        // mirrors and sharp glass alone.
+        add_far_sides(image);
         film[FilmOutput::caustics] = std::move(image);
     }
     // The film, and the images combined was summed from that it does not keep.
@@ -256,7 +321,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         view_settings.samples_per_light = settings.direct_samples;
         const ViewSamples samples = generate_view_samples(scene, camera, view_settings, control, stats);
         reserve_split_samples(budget, settings, pixels, samples.samples.size(), samples.lobes.size(),
-                              !samples.transmitted_direct.empty(), samples.terminator.size());
+                              !samples.transmitted_direct.empty(), samples.terminator.size(), samples.far_side.size());
 
         // 2. Direct light at the view samples.
         control.begin_stage("direct light", 0.15, 0.35);
@@ -279,7 +344,13 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         photon_settings.aimed_fraction = settings.aimed_photons;
         photon_settings.caustic_shares = caustics_output;
         view_sample_sphere(samples, photon_settings.focus_center, photon_settings.focus_radius);
-        const PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
+        PhotonMap photons = trace_photons(scene, photon_settings, control, stats);
+        // The far sides of translucent surfaces take their caustic photons first; the rest of the pipeline the
+        // photons the view samples receive.
+        const std::vector<glm::vec3> far_sides =
+            gather_far_sides(scene, samples, camera, arena.max_concurrency(), photons, settings,
+                             splat_params(settings, iteration.radius, photons.emitted), seed, budget, control, stats);
+        keep_reflected_photons(photons);
 
         // 3. The cluster hierarchy, if the method splats onto one.
         const std::optional<ClusterHierarchy> hierarchy = build_hierarchy(*splatter, samples, camera, control, stats);
@@ -316,7 +387,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");
         result.film = develop_film(samples, direct, indirect.radiance, caustics_output ? &caustic.radiance : nullptr,
-                                   settings, stats);
+                                   far_sides, settings, stats);
         // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
         // float's range: say so rather than hand back a frame with infinities in it.
         size_t overflowed = 0;

@@ -249,6 +249,29 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
 
 bool is_transmission(const Lobe& l) { return l.kind == ClosureKind::translucent || l.kind == ClosureKind::refraction; }
 
+glm::vec3 translucent_albedo(const Bsdf& b) {
+    glm::vec3 albedo(0.0f);
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (b.lobes[k].kind == ClosureKind::translucent) albedo += b.lobes[k].weight;
+    return albedo;
+}
+
+namespace {
+
+Bsdf lobes_where(const Bsdf& b, bool translucent) {
+    Bsdf out = b;
+    out.lobe_count = 0;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if ((b.lobes[k].kind == ClosureKind::translucent) == translucent) out.lobes[out.lobe_count++] = b.lobes[k];
+    if (translucent) out.lambert = out.mirror = out.refraction = out.transparent = glm::vec3(0.0f);
+    return out;
+}
+
+}  // namespace
+
+Bsdf translucency_of(const Bsdf& b) { return lobes_where(b, true); }
+Bsdf without_translucency(const Bsdf& b) { return lobes_where(b, false); }
+
 bool is_diffuse_reflection(const Lobe& l) {
     return l.kind == ClosureKind::diffuse || l.kind == ClosureKind::principled_diffuse || l.kind == ClosureKind::sheen ||
            l.kind == ClosureKind::velvet;

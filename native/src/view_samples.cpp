@@ -28,7 +28,7 @@ namespace ps {
 size_t ViewSamples::bytes() const {
     return samples.capacity() * sizeof(ViewSample) + lobes.capacity() * sizeof(Lobe) +
            terminator.capacity() * sizeof(SampleLift) + transmitted_direct.capacity() * sizeof(glm::vec3) +
-           caustic_emission.capacity() * sizeof(glm::vec3) +
+           caustic_emission.capacity() * sizeof(glm::vec3) + far_side.capacity() * sizeof(ViewSample) +
            emission.capacity() * sizeof(glm::vec3) +
            alpha.capacity() * sizeof(float) + first_normal.capacity() * sizeof(glm::vec3) +
            first_depth.capacity() * sizeof(float);
@@ -55,6 +55,11 @@ struct CameraPath {
     // diffuse-labelled one (translucency), and a glossy, mirror or refracting part followed one.
     bool diffuse_last = false;
     bool caustic = false;
+    // The last non-delta scatter was translucency, and a mirror or sharp refraction has followed it: the light
+    // this ray meets (lights, emission, the world) is the far side's caustic photons' (add_far_side_sample), not
+    // the path's.
+    bool after_translucency = false;
+    bool translucent_then_sharp = false;
 };
 
 // What the first surface a pixel's camera ray hits tells its pixel (as Cycles' passes).
@@ -75,6 +80,7 @@ struct PixelPaths {
     Rng& rng;
     std::vector<ViewSample>& found;
     std::vector<Lobe>& found_lobes;
+    std::vector<ViewSample>& found_far_side;  // ViewSamples::far_side's
     // The lifts of found's samples that have one (index within found); null unless the scene has an offset.
     std::vector<ViewSamples::SampleLift>* found_terminator;
     glm::vec3& emitted;
@@ -91,8 +97,9 @@ struct PixelPaths {
 
 // Emitters met by a ray that left a rough transmission were that vertex's next-event estimation's, whose own
 // BSDF-sampled probes and light samples cover them, weighted against each other (direct_light.h): 0 here. Met
-// after a delta bounce (or by a camera ray), nothing else finds them: 1.
-float emitter_weight(const CameraPath& path) { return path.after_lobe ? 0.0f : 1.0f; }
+// through mirrors or sharp glass after translucency, they are the far side's caustic photons': 0. Met after a
+// delta bounce otherwise (or by a camera ray), nothing else finds them: 1.
+float emitter_weight(const CameraPath& path) { return path.after_lobe || path.translucent_then_sharp ? 0.0f : 1.0f; }
 
 // Light a camera path found along the way (emission, background, a light): the pixel's, and the Caustics
 // output's too where the path is a caustic one.
@@ -142,6 +149,32 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     }
 }
 
+// The far side of translucent surface s, where a camera path scatters through it: a Lambert surface of b's
+// translucent albedo facing the other way (translucent_albedo, shading.h), which gathers the caustic photons stored
+// on that side (render.cpp). The camera path goes on through the translucency for the rest of the light there
+// (and its next-event estimation takes the direct light), but the light it would find through mirrors and sharp
+// glass alone, a sun's caustic, it could find only as Cycles does, by meeting the sun: fireflies (seeds 66 and 140
+// of the differential scenes). It drops that light (emitter_weight), which the far side's photons carry. Its wo is
+// b.wo mirrored through the surface: a Lambert part does not depend on it, and every test of sides then sees it on
+// the sample's own.
+void add_far_side_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& s, const Bsdf& b,
+                         const glm::vec3& weight) {
+    ViewSample sample{};
+    sample.position = s.position;  // made camera-relative by the caller
+    sample.normal = -b.ng;
+    sample.shading_normal = -b.n;
+    sample.rounding_scale = s.rounding_scale;
+    sample.wo = b.wo - 2.0f * glm::dot(b.wo, b.ng) * b.ng;
+    sample.albedo = translucent_albedo(b);
+    sample.throughput = weight;
+    sample.pixel = p.pixel;
+    sample.flags = (path.depth > 0 ? kViaSpecular : 0u) | (std::min<uint32_t>(path.branch, 0xffu) << kBranchShift);
+    // The other side of a transmitting surface is another place: inside where the path stands outside.
+    if (!inside_transmitter(s)) sample.flags |= kInsideSample;
+    sample.depth = p.first.depth;
+    p.found_far_side.push_back(sample);
+}
+
 // Follows one camera path (and returns when it ends in a view sample, is absorbed, escapes or is dropped),
 // adding emission, background and lights seen along the way to p.emitted. At the first surface whose BSDF has
 // more than one part (lobes, mirror, refraction, transparency, rough transmission), every part is followed:
@@ -170,7 +203,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         }
         // Lights with a size, seen in mirrors, through glass and rough transmission (Cycles' camera rays do not
         // see lights themselves).
-        if (!path.camera_ray && !path.after_lobe && p.sources != nullptr) {
+        if (!path.camera_ray && emitter_weight(path) > 0.0f && p.sources != nullptr) {
             for (size_t l = 0; l < p.sources->size(); ++l) {
                 const Light* light = p.sources->light(l);
                 if (light == nullptr || p.sources->is_delta(l)) continue;
@@ -185,8 +218,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         }
         if (!found) {
             // After a rough transmission the world was that vertex's next-event estimation's, by its BSDF probes
-            // alone (direct_light.h): not again here.
-            if (!path.after_lobe) {
+            // alone (direct_light.h): not again here; nor after translucency and sharp parts (emitter_weight).
+            if (emitter_weight(path) > 0.0f) {
                 const ShaderRay kind = path.camera_ray ? ShaderRay::camera : ShaderRay::reflected;
                 float w = 1.0f;
                 if (path.mirror_pdf > 0.0f && p.sources != nullptr && !p.sources->world().constant() &&
@@ -221,11 +254,16 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (path.depth == 0) choose_defensively(b);  // the camera's first hit (shading.h)
 
         // The parts and their weights (luminance of what each scatters, roughly), indexed: 0 the reflection parts
-        // (the view sample), 1 the transmission lobes, 2 the mirror, 3 the sharp refraction, 4 transparency.
-        float weight[5] = {0.0f, 0.0f, luminance(b.mirror), luminance(b.refraction), luminance(b.transparent)};
+        // (the view sample), 1 the rough refraction, 2 the mirror, 3 the sharp refraction, 4 transparency, 5
+        // translucency.
+        constexpr int kParts = 6;
+        float weight[kParts] = {0.0f, 0.0f, luminance(b.mirror), luminance(b.refraction), luminance(b.transparent), 0.0f};
         weight[0] = luminance(b.lambert);
-        for (int k = 0; k < b.lobe_count; ++k)
-            weight[is_transmission(b.lobes[k]) ? 1 : 0] += lobe_sampling_weight(b.lobes[k], b.n, b.wo);
+        for (int k = 0; k < b.lobe_count; ++k) {
+            const Lobe& lobe = b.lobes[k];
+            weight[lobe.kind == ClosureKind::translucent ? 5 : is_transmission(lobe) ? 1 : 0] +=
+                lobe_sampling_weight(lobe, b.n, b.wo);
+        }
         int parts = 0;
         float total = 0.0f;
         for (float& w : weight) {
@@ -237,16 +275,16 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         const bool split = parts > 1 && p.settings.split_at_glass && !path.split_done;
         if (split) path.split_done = true;
         // Which parts go on from here, each with the factor its throughput is divided by (its probability).
-        bool take[5] = {false, false, false, false, false};
-        float probability[5] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
+        bool take[kParts] = {false, false, false, false, false, false};
+        float probability[kParts] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};
         if (split) {
-            for (int k = 0; k < 5; ++k) take[k] = weight[k] > 0.0f;
+            for (int k = 0; k < kParts; ++k) take[k] = weight[k] > 0.0f;
         } else if (parts == 1) {
-            for (int k = 0; k < 5; ++k) take[k] = weight[k] > 0.0f;
+            for (int k = 0; k < kParts; ++k) take[k] = weight[k] > 0.0f;
         } else {
             float pick = p.rng.uniform() * total;
-            int chosen = 4;
-            for (int k = 0; k < 5; ++k) {
+            int chosen = kParts - 1;
+            for (int k = 0; k < kParts; ++k) {
                 if (weight[k] > 0.0f && pick < weight[k]) {
                     chosen = k;
                     break;
@@ -259,7 +297,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         }
         const bool can_continue = path.depth < p.settings.max_specular_depth;
         // Paths that go on from this vertex, the first of which continues this loop.
-        CameraPath next[5];
+        CameraPath next[kParts];
         int next_count = 0;
         // `same_ray`: transparency, which lets the ray go on as it was (its MIS state, camera-ness and labels
         // kept). `diffuse`: the scatter is one Cycles labels diffuse (translucency).
@@ -277,6 +315,9 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
                 n.after_lobe = lobe;
                 n.caustic = path.caustic || (path.diffuse_last && !diffuse);
                 n.diffuse_last = diffuse;
+                // Transparency keeps both (same_ray); a lobe's scatter sets the first anew, a delta keeps it.
+                n.after_translucency = lobe ? diffuse : path.after_translucency;
+                n.translucent_then_sharp = !lobe && path.after_translucency;
                 n.mirror_pdf = mirror_pdf;
                 n.mirror_x = s.position;
             }
@@ -290,28 +331,29 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             if (refraction_direction(b, d)) go_on(d, b.refraction / probability[3], true, false);
         }
         if (take[4]) go_on(-b.wo, b.transparent / probability[4], true, false, true);
-        if (take[1]) {
-            // Rough transmission: its own next-event estimation here, then a sampled direction on.
-            const glm::vec3 t = path.throughput / probability[1];
+        // Rough refraction and translucency: each its own next-event estimation here, then a sampled direction
+        // on; translucency also its far side's caustic photons (add_far_side_sample).
+        const auto transmit = [&](const Bsdf& part, float part_probability, bool translucency) {
+            const glm::vec3 t = path.throughput / part_probability;
             if (p.direct != nullptr && p.transmitted_direct != nullptr) {
                 const TerminatorLift lift =
                     p.found_terminator ? terminator_lift(p.scene, s, -s.geometric_normal) : TerminatorLift{};
-                const glm::vec3 light = t * direct_light_at(*p.direct, b, s.position, s.rounding_scale,
+                const glm::vec3 light = t * direct_light_at(*p.direct, part, s.position, s.rounding_scale,
                                                             LobeSet::transmission, p.rng, p.rays, {}, &lift);
                 *p.transmitted_direct += light;
                 // Its own light is a caustic one on a caustic path, or where right after translucency this surface
-                // transmits through rough refraction alone (Cycles drops that closure there).
-                bool translucent = false;
-                for (int k = 0; k < b.lobe_count; ++k)
-                    translucent = translucent || b.lobes[k].kind == ClosureKind::translucent;
-                if ((path.caustic || (path.diffuse_last && !translucent)) && p.caustic_emitted != nullptr)
+                // refracts (Cycles drops that closure there).
+                if ((path.caustic || (path.diffuse_last && !translucency)) && p.caustic_emitted != nullptr)
                     *p.caustic_emitted += light;
             }
+            if (translucency) add_far_side_sample(p, path, s, b, t);
             const float u0 = p.rng.uniform(), u1 = p.rng.uniform(), u2 = p.rng.uniform();
-            const BsdfSample bs = bsdf_sample_set(b, LobeSet::transmission, u0, u1, u2);
+            const BsdfSample bs = bsdf_sample_set(part, LobeSet::transmission, u0, u1, u2);
             if (bs.kind == ScatterKind::lobes)
-                go_on(bs.direction, bs.weight / probability[1], bs.transmitted, true, false, !bs.glossy);
-        }
+                go_on(bs.direction, bs.weight / part_probability, bs.transmitted, true, false, translucency);
+        };
+        if (take[1]) transmit(without_translucency(b), probability[1], false);
+        if (take[5]) transmit(translucency_of(b), probability[5], true);
         if (take[0] && bsdf_has_branching_clearcoat(b)) {
             // A sharp clearcoat's mirror-like part, as Cycles finds it (shading.h: clearcoat_branches). Its
             // weight is small (a few % but at grazing angles), so the branch is taken with that probability
@@ -397,6 +439,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     const int bands = (height + kBandRows - 1) / kBandRows;
     std::vector<std::vector<ViewSample>> band_samples(static_cast<size_t>(bands));
     std::vector<std::vector<Lobe>> band_lobes(static_cast<size_t>(bands));
+    std::vector<std::vector<ViewSample>> band_far_side(static_cast<size_t>(bands));
     const bool lifts = scene.any_terminator_offset();
     std::vector<std::vector<ViewSamples::SampleLift>> band_lifts(lifts ? static_cast<size_t>(bands) : 0);
     std::atomic<uint64_t> extra_rays{0};
@@ -413,6 +456,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             std::vector<ViewSample> found;
             std::vector<Lobe> found_lobes;
             std::vector<ViewSamples::SampleLift> found_lifts;
+            std::vector<ViewSample> found_far_side;
             uint64_t rays = 0;
             const int y_end = std::min(height, (band + 1) * kBandRows);
             found.reserve(static_cast<size_t>(y_end - band * kBandRows) * static_cast<size_t>(width));
@@ -441,9 +485,9 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                         Rng rng(settings.seed, RngDomain::camera, pixel);
                         const CameraPath start{camera_rays[k], glm::vec3(1.0f), 0};
                         FirstHit first;
-                        const size_t before = found.size();
+                        const size_t before = found.size(), before_far_side = found_far_side.size();
                         PixelPaths paths{scene, camera, settings, sources_ptr, direct_ptr, static_cast<uint32_t>(pixel),
-                                         rng, found, found_lobes, lifts ? &found_lifts : nullptr,
+                                         rng, found, found_lobes, found_far_side, lifts ? &found_lifts : nullptr,
                                          out.emission[pixel],
                                          out.transmitted_direct.empty() ? nullptr : &out.transmitted_direct[pixel],
                                          out.caustic_emission.empty() ? nullptr : &out.caustic_emission[pixel],
@@ -456,6 +500,8 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
                         }
                         rays += paths.rays;
                         for (size_t j = before; j < found.size(); ++j) found[j].position -= out.origin;
+                        for (size_t j = before_far_side; j < found_far_side.size(); ++j)
+                            found_far_side[j].position -= out.origin;
                         out.alpha[pixel] = first.alpha;
                         out.first_normal[pixel] = first.normal;
                         out.first_depth[pixel] = first.depth;
@@ -465,6 +511,7 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             band_samples[static_cast<size_t>(band)].assign(found.begin(), found.end());
             band_lobes[static_cast<size_t>(band)] = std::move(found_lobes);
             if (lifts) band_lifts[static_cast<size_t>(band)] = std::move(found_lifts);
+            band_far_side[static_cast<size_t>(band)].assign(found_far_side.begin(), found_far_side.end());
             extra_rays += rays;
             control.advance(rows_done += static_cast<uint64_t>(y_end - band * kBandRows),
                             static_cast<uint64_t>(height));
@@ -479,9 +526,11 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
     }
     out.samples.reserve(count);
     out.lobes.reserve(lobe_count);
-    size_t lift_count = 0;
+    size_t lift_count = 0, far_side_count = 0;
     for (const auto& band : band_lifts) lift_count += band.size();
+    for (const auto& band : band_far_side) far_side_count += band.size();
     out.terminator.reserve(lift_count);
+    out.far_side.reserve(far_side_count);
     for (size_t band = 0; band < band_samples.size(); ++band) {
         const uint32_t offset = static_cast<uint32_t>(out.lobes.size());
         const uint32_t first_sample = static_cast<uint32_t>(out.samples.size());
@@ -495,8 +544,10 @@ ViewSamples generate_view_samples(const Scene& scene, const Camera& world_camera
             }
             std::vector<ViewSamples::SampleLift>().swap(band_lifts[band]);
         }
+        out.far_side.insert(out.far_side.end(), band_far_side[band].begin(), band_far_side[band].end());
         std::vector<ViewSample>().swap(band_samples[band]);
         std::vector<Lobe>().swap(band_lobes[band]);
+        std::vector<ViewSample>().swap(band_far_side[band]);
     }
     if (extra_rays.load() > 0) stats.counters["shadow_rays"] += static_cast<double>(extra_rays.load());
     stats.counters["view_samples"] += static_cast<double>(count);

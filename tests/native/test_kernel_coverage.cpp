@@ -28,6 +28,16 @@ ViewSamples samples_of(const Scene& scene, const Camera& camera) {
     return generate_view_samples(scene, camera, ViewSampleSettings{}, control, stats);
 }
 
+// The far sides of samples' translucent surfaces as view samples of their own (render.cpp gathers them so).
+ViewSamples far_sides_of(const ViewSamples& samples) {
+    ViewSamples sides;
+    sides.width = samples.width;
+    sides.height = samples.height;
+    sides.origin = samples.origin;
+    sides.samples = samples.far_side;
+    return sides;
+}
+
 std::vector<float> coverage_of(const Scene& scene, const ViewSamples& samples, float radius,
                                Kernel kernel = Kernel::uniform, uint64_t seed = 1) {
     SplatParams params;
@@ -111,8 +121,8 @@ TEST(KernelCoverage, GlassOverThePlaneIsSeenThrough) {
 
 TEST(KernelCoverage, ASurfaceThatTransmitsAndReflectsCoversItsOwnKernel) {
     // Half translucent, half diffuse (seed 150 of the differential scenes): photons land on the surface itself, so
-    // its own view samples are fully covered. A probe that passed through it as through translucency found nothing
-    // and divided the estimate by kMinCoverage.
+    // its own view samples, and its far side's, are fully covered. A probe that passed through it as through
+    // translucency found nothing and divided the estimate by kMinCoverage.
     Scene scene;
     Material mix;
     mix.kind = MaterialKind::closures;
@@ -132,6 +142,27 @@ TEST(KernelCoverage, ASurfaceThatTransmitsAndReflectsCoversItsOwnKernel) {
         ++on_sheet;
     }
     EXPECT_EQ(on_sheet, 64u * 64u);  // one diffuse sample per pixel; the translucent part goes on below
+    EXPECT_EQ(samples.far_side.size(), 64u * 64u);  // and gathers the photons under it on its far side
+    for (float c : coverage_of(scene, far_sides_of(samples), 0.3f)) ASSERT_NEAR(c, 1.0f, 1e-5f);
+}
+
+TEST(KernelCoverage, ATranslucentSheetCoversItsFarSide) {
+    // Translucent alone: the camera path goes on through it (and escapes here); its far side gathers the caustic
+    // photons stored under it, and probes find the sheet.
+    Scene scene;
+    Material sheet;
+    sheet.kind = MaterialKind::closures;
+    Closure translucent;
+    translucent.kind = ClosureKind::translucent;
+    translucent.color = glm::vec3(0.8f);
+    sheet.closures = {translucent};
+    const uint32_t m = scene.add_material(sheet);
+    test::add_quad(scene, "sheet", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, m);
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));
+    EXPECT_TRUE(samples.samples.empty());
+    ASSERT_EQ(samples.far_side.size(), 64u * 64u);
+    for (const ViewSample& s : samples.far_side) ASSERT_LT(s.normal.z, 0.0f);
+    for (float c : coverage_of(scene, far_sides_of(samples), 0.3f)) ASSERT_NEAR(c, 1.0f, 1e-5f);
 }
 
 TEST(KernelCoverage, GlossySamplesKeepTheirEstimate) {

@@ -53,6 +53,8 @@ struct Material {
     bool transmits = false;        // a closure sends light to the other side
     bool reflects = false;         // a non-delta closure scatters light back to the side it came from: photons
                                    // arriving on that side are stored here
+    bool translucent = false;      // a translucent closure: caustic photons arriving on either side are stored
+                                   // here, for the far sides of camera paths through it (ViewSamples::far_side)
     bool transparent = false;      // a transparent closure: shadow rays pass through, attenuated
     bool anisotropic = false;      // a microfacet closure with alpha_x != alpha_y: hits need a tangent
     bool textured = false;         // a closure reads a texture: hits need their UV

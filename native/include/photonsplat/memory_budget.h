@@ -57,9 +57,11 @@ void reserve_frame(MemoryBudget& budget, const Scene& scene, const Camera& camer
 // samples beyond one a pixel add to every per-sample structure reserve_frame counted. Called once their number is
 // known, right after the view samples stage (so their own bytes are counted just after they were allocated;
 // they are at most one more sample a pixel for each part of a BSDF beyond the first), with the lobes of glossy
-// samples, the buffer of light through rough transmission and the samples' shadow terminator lifts.
+// samples, the buffer of light through rough transmission, the samples' shadow terminator lifts and the far sides
+// of translucent surfaces (ViewSamples::far_side).
 void reserve_split_samples(MemoryBudget& budget, const RenderSettings& settings, size_t pixels, size_t samples,
-                           size_t lobes = 0, bool transmitted_direct = false, size_t terminator_lifts = 0);
+                           size_t lobes = 0, bool transmitted_direct = false, size_t terminator_lifts = 0,
+                           size_t far_sides = 0);
 
 // Refuses (InvalidInput, as reserve does) a frame that would not fit, before anything is allocated; for a caller
 // that holds `extra_bytes_per_pixel` beside each pass's buffers (the progressive render's running sums).

@@ -16,6 +16,10 @@ enum PhotonFlags : uint32_t {
     kCaustic = 1u,  // path light → specular+ → this diffuse hit (L S+ D)
     kInsidePhoton = 2u,  // stored on the back face of a transmitting surface (inside glass): splats only onto view
                          // samples there too, never through the surface onto what lies close outside (splat.h)
+    // A caustic photon stored on a translucent surface: the far sides of that surface's view samples gather it
+    // (ViewSamples::far_side, render.cpp).
+    kFarSidePhoton = 4u,
+    kFarSideOnly = 8u,  // ... and that surface reflects nothing: only they do, the splat of the view samples never
 };
 
 // The share of a photon's light that Cycles' Caustics toggles (Light Paths, reflective and refractive off) remove,

@@ -138,6 +138,13 @@ bool bsdf_has_narrow_lobe(const Bsdf& b);
 // constant world was 1.055 of Cycles without it). Call once b's parts are all there.
 void choose_defensively(Bsdf& b);
 bool is_transmission(const Lobe& lobe);
+// Translucency is Lambert's reflection turned to the other side: f = weight / π for wi on the far side of n, and
+// 0 on wo's. Camera paths take it as a part of its own (view_samples.h): its caustic light is gathered from the
+// photons stored on the other side, as by a Lambert surface of this albedo facing that way.
+glm::vec3 translucent_albedo(const Bsdf& b);
+// b's translucent lobes alone, and b without them (its rough refraction and the rest).
+Bsdf translucency_of(const Bsdf& b);
+Bsdf without_translucency(const Bsdf& b);
 // A part Cycles labels a diffuse reflection (Oren–Nayar, Principled diffuse, sheen, velvet), as against a microfacet
 // one: its Light Path flags and Caustics toggles go by that label.
 bool is_diffuse_reflection(const Lobe& lobe);

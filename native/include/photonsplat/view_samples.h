@@ -1,6 +1,6 @@
 // Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors, glass and rough transmission to the
 // surfaces that keep it: a view sample holds a surface's reflection parts (shading.h), what photons are later
-// splatted onto. At the first surface with more than one part (the reflection lobes, a mirror, a refraction,
+// splatted onto (and at translucency, its far side, for the caustic photons there). At the first surface with more than one part (the reflection lobes, a mirror, a refraction,
 // transparency, a rough transmission) the path is split once: each part ends in a view sample of its own, weighted
 // by the part (glass: the refracted and the reflected path, weighted by Fresnel), so a pixel has one sample or a few.
 #pragma once
@@ -65,6 +65,10 @@ struct ViewSamples {
                                         // dropped, else one per part of the first hit's BSDF that ends in a sample
                                         // (shading.h: its lobes, its mirror, refraction, transparency, transmission)
     std::vector<Lobe> lobes;            // the reflection lobes of kGlossy samples (beyond the Lambert albedo)
+    // The far sides of the translucent surfaces camera paths scattered through, in pixel order: Lambert samples of
+    // the translucent albedo facing away from the path, which gather only the caustic photons stored on that side
+    // (render.cpp), what the path drops (view_samples.cpp: add_far_side_sample). No direct light, no lobes.
+    std::vector<ViewSample> far_side;
     // The lift of the shadow rays of the samples that have one (shadow_terminator.h: on a smooth triangle of an
     // instance with a terminator offset), by sample index, in increasing order; empty where none has.
     struct SampleLift {
