@@ -269,15 +269,17 @@ Film develop_film(const ViewSamples& samples, const std::vector<glm::vec3>& dire
 }
 
 
-// The sphere around the view samples (render space), where photons are useful (radius 0 without samples).
+// The sphere around the view samples and the far sides of translucency (render space), where photons are useful
+// (radius 0 without samples).
 void view_sample_sphere(const ViewSamples& samples, glm::vec3& center, float& radius) {
     radius = 0.0f;
-    if (samples.samples.empty()) return;
+    if (samples.samples.empty() && samples.far_side.empty()) return;
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-    for (const ViewSample& s : samples.samples) {
-        lo = glm::min(lo, s.position);
-        hi = glm::max(hi, s.position);
-    }
+    for (const std::vector<ViewSample>* list : {&samples.samples, &samples.far_side})
+        for (const ViewSample& s : *list) {
+            lo = glm::min(lo, s.position);
+            hi = glm::max(hi, s.position);
+        }
     center = samples.origin + 0.5f * (lo + hi);
     radius = 0.5f * glm::length(hi - lo);
     if (!std::isfinite(radius) || !std::isfinite(center.x + center.y + center.z)) radius = 0.0f;
