@@ -751,6 +751,27 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   `GlossyPhotons.StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag` and `ScatterLabels`; `test_methods.py`'s
   caustics pass in every method.
 
+- **Lobes of α 0.01 to 0.04 were splatted** (sampling; Photon Splat only). A view sample weighs each photon by its
+  lobes at the photon's direction; a lobe a few degrees wide is next to nothing for nearly every photon and
+  hundreds of times the mean for the few within it. Since stop 38 the camera path follows every reflection lobe
+  up to α 0.04 (roughness 0.2) as a branch, where until then it followed those up to α 0.01 (docs/closures.md,
+  "Lobes too narrow for photons"). Seed 198 (a Beckmann 0.146 cylinder, α 0.021): its block 0.30 and 0.62 of
+  Cycles after 4 and 16 s → 1.3–1.4 and 1.02–1.06 (two runs; the reference 1.016), the slope +1.46 → −0.91. Test:
+  `GlossyRender.ALobeOfRoughnessPointTwoIsNarrowForPhotons`. Measured on 28 scenes in "Stop 38" below.
+- **A caustic seen through translucency was the camera path's alone** (a missing light path; Photon Splat only).
+  A camera path that scattered through a Translucent BSDF found the light reaching the other side through mirrors
+  and sharp glass alone only as Cycles does, by meeting the light: a sun behind glass made fireflies, a point lamp
+  nothing. Since stop 39 translucency is a part of its own at a camera vertex: where the path scatters through it,
+  the surface's far side is a Lambert sample of the translucent albedo (`ViewSamples::far_side`) that gathers the
+  caustic photons stored there (`gather_far_sides`, render.cpp), and the path drops what it meets through mirrors
+  and sharp glass after the translucency (docs/closures.md, "Translucency's far side"). Against one Cycles pair
+  each, old engine → new: seed 66 (sun → glass → translucent cylinder) 1.179 → 1.058 of Cycles, its block relMSE
+  at 16 s 2.0 → 0.030 (the reference 1.051: the rest is "microfacet near 0.02"); seed 140 0.742 → 0.895 (the
+  reference 0.942, Cycles' pair 1.57 % apart at 8192 samples), its caustic energy 0.327 → 0.863, slope −0.04 →
+  −0.56; seed 56 0.941 → 0.963 (the reference 0.962), its block relMSE halved. Gathering every photon on the far
+  side instead of going on blurred a translucent Suzanne's inside, lit through its own walls (seed 7: block relMSE
+  at 16 s 0.00014 → 0.0017; 0.00016 now). Tests: `test_translucency.cpp`. Measured in "Stop 39" below.
+
 Fixed in the reference renderer (each with its test in `tests/python/test_reference.py`):
 
 - **Caustic photons were traced only where some surface was purely specular** (a missing light path). The path
@@ -808,18 +829,11 @@ Where Cycles is not a usable oracle at these samples:
 
 Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
 
-- **Seed 66**: a camera path goes on through translucency; where it then meets sharp glass and the sun it adds a
-  one-pixel firefly (a block 4× at 16 s, the image 1.07). That light (sun → glass → translucent surface → eye) is
-  the camera path's alone, unbiased but noisy: photons would carry it better.
-
-- **A caustic seen through translucency or rough transmission** (a missing light path, Photon Splat's now alone).
-  Light that reaches a translucent or rough-transmitting surface through a mirror or glass and is seen from its
-  other side (sun → glass → translucent cylinder → eye) is mostly missed by the engine: its view samples gather
-  photons through their reflection parts only, and what a camera path finds by going on through translucency to
-  glass and the sun is a noisy share (seed 66's firefly). The reference gathers it now (its fix above): seed 140
-  went 0.756 → 0.947 in the reference, while Photon Splat stays 0.743 (Cycles is not converged there, its pair
-  1.57 % apart at 8192 samples). The engine needs the same gather: a view sample's far side taking the caustic
-  photons stored there through its transmission parts.
+- **A caustic seen through rough refraction** (a missing light path, Photon Splat's now alone). Light that reaches
+  a surface that refracts roughly (without a reflection part that stores photons) through a mirror or glass and is
+  seen from its other side is found only by camera paths that go on through it and meet the light. The reference
+  gathers it by its far side's photons through its transmission parts; the engine does so for translucency since
+  stop 39 (above), but not yet for rough refraction, whose lobe, unlike translucency's, depends on the directions.
 
 - **A clearcoat's reflection of the scene's indirect light**: Photon Splat gathers photons at a clearcoat by its
   GTR1 value, while Cycles' estimate of that light (its BSDF-sampled rays) reflects what lies in the mirror
@@ -827,6 +841,22 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
   reference now agrees with Cycles, Photon Splat stays 1–2 % bright in rooms of clearcoated walls: seeds 24, 89, 99
   and 102 at 1.015, 1.020, 1.018 and 1.013 (the reference 1.005, 1.005, 1.001, 0.999). Following the clearcoat's
   mirror-like part with the camera path, as glass and mirrors are followed, would match it.
+
+- **A caustic seen in a narrow lobe is now the camera path's** (since stop 38, for lobes of α 0.01–0.04 as it was
+  below). A branch finds light that came through glass or a mirror only by going through them and meeting a
+  light, as Cycles does; the splat had it from the photons that made the caustic. Seed 56 (a rough glass ball's
+  caustic on a clearcoated Principled floor of roughness 0.19 under two small point lamps): its block 0.67 → 0.33
+  of Cycles after 16 s (Cycles and the reference speckled there too); seed 78 (a rough glass Suzanne of Beckmann
+  0.116 beside a glass cube under spots): a block 1.05 → 1.99 at 16 s, 5.6 at 4 s. The photons could keep what the
+  branch cannot find well: splat onto a narrow lobe only the photons that met nothing but mirrors, sharp glass,
+  transparency or rough transmission since the light, and have its branch drop what it finds after such a chain
+  alone (lights it meets, the next-event estimates of rough transmission). Every splatting method would have to
+  weigh a photon's lobes by its history.
+- **A caustic on a small curved surface is blurred dim** (kernel bias near geometry). Seed 128: the caustic of a
+  mirror ball on an Oren–Nayar torus is 0.69 of Cycles' Caustics excess after 40 passes (the reference 1.01 of
+  the whole block); with 4 times the photons (a smaller radius) 0.93, with Boundary Correction off 0.50. The
+  radius is the scene's, not the caustic's: caustic photons are dense where they focus and could take a radius
+  of their own.
 
 Found, not fixed yet (the reference; the second both):
 
