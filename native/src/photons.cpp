@@ -159,7 +159,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // Stored where view samples receive it: on a surface that reflects it, and, where it is a caustic one, on a
         // translucent surface, whose far side gathers those (view_samples.h).
         const bool reflected = bsdf_has(b, LobeSet::reflection);
-        const bool far_side = only_specular_so_far && translucent_albedo(b) != glm::vec3(0.0f);
+        const bool far_side = only_specular_so_far && m.translucent && translucent_albedo(b) != glm::vec3(0.0f);
         if (!direct && (reflected || far_side)) {
             const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |

@@ -1,8 +1,9 @@
 // Stage 1 of the pipeline: a camera ray per pixel, followed through mirrors, glass and rough transmission to the
 // surfaces that keep it: a view sample holds a surface's reflection parts (shading.h), what photons are later
-// splatted onto (and at translucency, its far side, for the caustic photons there). At the first surface with more than one part (the reflection lobes, a mirror, a refraction,
-// transparency, a rough transmission) the path is split once: each part ends in a view sample of its own, weighted
-// by the part (glass: the refracted and the reflected path, weighted by Fresnel), so a pixel has one sample or a few.
+// splatted onto (and at translucency, its far side, for the caustic photons there). At the first surface with more
+// than one part (the reflection lobes, a mirror, a refraction, transparency, a rough transmission, translucency)
+// the path is split once: each part ends in a view sample of its own, weighted by the part (glass: the refracted
+// and the reflected path, weighted by Fresnel), so a pixel has one sample or a few.
 #pragma once
 #include <cstdint>
 #include <vector>
