@@ -92,6 +92,9 @@ def parse_args(argv):
                         help="with --redo: keep the reference of a scene's last results (an engine-only change)")
     parser.add_argument("--times", default=",".join(f"{t:g}" for t in TIMES), help="Photon Splat snapshots (s)")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--setting", action="append", default=[], metavar="NAME=VALUE",
+                        help="a Photon Splat setting of the core's table to render with instead of the scene's "
+                             "(e.g. adaptive_radius=false, to measure a change against its toggle); repeatable")
     parser.add_argument("--cycles-only", action="store_true", help="fill the Cycles cache only")
     parser.add_argument("--redo", action="store_true", help="render scenes that already have results again")
     parser.add_argument("--report-only", action="store_true")
@@ -106,6 +109,25 @@ def parse_args(argv):
     args = parser.parse_args(argv)
     args.times = tuple(float(t) for t in args.times.split(","))
     return args
+
+
+def setting_overrides(texts):
+    """(name, value) of each --setting NAME=VALUE: true/false, an integer or a number, else the text (an enum)."""
+    pairs = []
+    for text in texts:
+        name, _, value = text.partition("=")
+        if value.lower() in ("true", "false"):
+            pairs.append((name, value.lower() == "true"))
+            continue
+        for kind in (int, float):
+            try:
+                pairs.append((name, kind(value)))
+                break
+            except ValueError:
+                pass
+        else:
+            pairs.append((name, value))
+    return pairs
 
 
 def parse_seeds(text):
@@ -252,6 +274,8 @@ def blender_main(argv):
         settings.threads = args.threads
         settings.max_bounces = BOUNCES  # Cycles' and the reference's path length bound (the scene's is 8)
         settings.caustics_pass = True
+        for name, value in setting_overrides(args.setting):
+            setattr(settings, name, value)
         progressive = core.Progressive(frame.scene, frame.camera, settings)
         snapshots, start = {}, cpu_seconds()
         wall = time.perf_counter()

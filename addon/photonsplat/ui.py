@@ -88,6 +88,7 @@ class RENDER_PT_photonsplat(PhotonSplatPanel, Panel):
         col.prop(settings, "method")
         col.prop(settings, "kernel")
         col.prop(settings, "boundary_correction")
+        col.prop(settings, "adaptive_radius")
         if settings.method == "directional":
             col.prop(settings, "directional_level")
         col = layout.column()

@@ -121,6 +121,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
     // Until its first scatter other than transparency, what the photon reaches is direct light, which shadow rays
     // (through transparent surfaces too) already count.
     bool direct = true;
+    bool after_glossy = false;  // kAfterGlossy
     float caustic_weight = 1.0f;
     for (int vertex = 0; vertex <= options.max_bounces; ++vertex) {
         Hit hit;
@@ -134,7 +135,9 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             if (!direct) {
                 const bool caustic = only_specular_so_far;
                 Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
-                              caustic ? static_cast<uint32_t>(kCaustic) : 0u, {}};
+                              (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
+                                  (after_glossy ? static_cast<uint32_t>(kAfterGlossy) : 0u),
+                              {}};
                 kept.set_shares(photon);
                 out.push_back(photon);
             }
@@ -142,6 +145,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
             direct = false;
+            after_glossy = false;
             const glm::vec3 albedo = lambert_albedo(scene, s, -ray.direction);
             const float keep = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;
@@ -165,7 +169,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
                                    (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
                                    (far_side ? static_cast<uint32_t>(kFarSidePhoton) : 0u) |
-                                   (reflected ? 0u : static_cast<uint32_t>(kFarSideOnly));
+                                   (reflected ? 0u : static_cast<uint32_t>(kFarSideOnly)) |
+                                   (after_glossy ? static_cast<uint32_t>(kAfterGlossy) : 0u);
             Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
                           flags, {}};
             kept.set_shares(photon);
@@ -200,7 +205,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             step_weight *= source.sources->mirror_weight(
                 source.index, s.position, offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
                 s.geometric_normal, -ray.direction, mirror_reported_pdf(b));
-        if (step.kind != ScatterKind::transparent) direct = false;
+        if (step.kind != ScatterKind::transparent) {
+            direct = false;
+            after_glossy = step.glossy;
+        }
         // Russian roulette on the weight keeps every surviving photon's power near the emitted one (times the
         // units of the refractions it made: 1/ior² inside glass).
         const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));

@@ -16,6 +16,7 @@
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/kernel_coverage.h"
 #include "photonsplat/memory_budget.h"
+#include "photonsplat/photon_density.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/progressive.h"
 #include "photonsplat/ray_tracer.h"
@@ -118,6 +119,95 @@ void correct_boundaries(const Scene& scene, const ViewSamples& samples, const Sp
     const std::vector<float> coverage = kernel_coverage(scene, samples, params, seed, control, stats);
     for (std::vector<glm::vec3>* light : lights)
         for (size_t i = 0; i < coverage.size(); ++i) (*light)[i] /= coverage[i];
+}
+
+// The light splatted onto the view samples: all of it, and what the Caustics output takes (empty without it).
+struct SplatLight {
+    std::vector<glm::vec3> indirect, caustic;
+    bool kernel_estimate = true;  // every level's was a kernel estimate (splatter.h)
+};
+
+// Stages 5–6½ for the photons of one radius: the splat (and the caustic splat), then the boundary correction of
+// kernel estimates at that radius. Adds to `light`.
+void splat_one_radius(const Scene& scene, const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
+                      const SplatParams& params, bool caustics_output, const RenderSettings& settings, uint64_t seed,
+                      SplatLight& light, RenderControl& control, Stats& stats) {
+    SplatEstimate indirect, caustic;
+    {
+        StageTimer t(stats, "splat");
+        indirect = splatter.splat(frame, photons, params, control, stats);
+        if (caustics_output) caustic = splat_caustics(splatter, frame, photons, params, control, stats);
+    }
+    control.check();
+    light.kernel_estimate = light.kernel_estimate && indirect.kernel_estimate;
+    if (settings.boundary_correction && indirect.kernel_estimate && !photons.photons.empty()) {
+        std::vector<std::vector<glm::vec3>*> lights = {&indirect.radiance};
+        if (caustics_output) lights.push_back(&caustic.radiance);
+        correct_boundaries(scene, frame.samples, params, seed, lights, control, stats);
+    }
+    const auto add = [](std::vector<glm::vec3>& sum, std::vector<glm::vec3>&& part) {
+        if (sum.empty()) {
+            sum = std::move(part);
+            return;
+        }
+        for (size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+    };
+    add(light.indirect, std::move(indirect.radiance));
+    if (caustics_output) add(light.caustic, std::move(caustic.radiance));
+}
+
+// Stage 4½: the photons of the smaller radii (photon_density.h) moved out of `photons` into one map per level
+// 1, 2, … (empty where none or where the settings keep one radius); `photons` keeps the ordinary level's. Their
+// memory, and each level's light while it is splatted, is reserved before the splat's pair cap is fitted.
+std::vector<PhotonMap> split_radius_levels(PhotonMap& photons, float radius, size_t samples, bool caustics_output,
+                                           const RenderSettings& settings, MemoryBudget& budget, Stats& stats) {
+    std::vector<PhotonMap> dense;
+    if (!settings.adaptive_radius || photons.photons.empty()) return dense;
+    StageTimer t(stats, "radius_levels");
+    budget.reserve("radius_levels", predict_radius_level_bytes(photons.photons.size()), "photons");
+    const RadiusLevels levels = photon_radius_levels(photons, radius, stats);
+    for (int k = 1; k < kRadiusLevels; ++k)
+        stats.counters["photons_radius_level_" + std::to_string(k)] += double(levels.count[k]);
+    const size_t moved = photons.photons.size() - levels.count[0];
+    if (moved > 0) {
+        budget.reserve("radius_level_photons",
+                       double(moved) * sizeof(Photon) + (caustics_output ? 2.0 : 1.0) * predict_per_sample_light_bytes(samples),
+                       "photons");
+        for (int k = 1; k < kRadiusLevels; ++k) {
+            dense.emplace_back();
+            dense.back().emitted = photons.emitted;
+            dense.back().aimed = photons.aimed;
+            dense.back().photons.reserve(levels.count[k]);
+        }
+        size_t kept = 0;  // the ordinary ones compacted in place, in their (Morton) order
+        for (size_t i = 0; i < photons.photons.size(); ++i) {
+            if (levels.level[i] == 0) photons.photons[kept++] = photons.photons[i];
+            else dense[levels.level[i] - 1].photons.push_back(photons.photons[i]);
+        }
+        photons.photons.resize(kept);
+        double bytes = 0.0;
+        for (const PhotonMap& m : dense) bytes += double(m.bytes());
+        stats.bytes["radius_level_photons"] = bytes;
+    }
+    budget.release("radius_levels");
+    return dense;
+}
+
+// Stages 5–6½: the ordinary photons splatted with the iteration's radius, then each level's with its own.
+// Without levels, exactly the one splat of the iteration's radius.
+SplatLight splat_levels(const Scene& scene, const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
+                        const std::vector<PhotonMap>& dense, const SplatParams& params, bool caustics_output,
+                        const RenderSettings& settings, uint64_t seed, RenderControl& control, Stats& stats) {
+    SplatLight light;
+    splat_one_radius(scene, splatter, frame, photons, params, caustics_output, settings, seed, light, control, stats);
+    for (size_t k = 0; k < dense.size(); ++k) {
+        if (dense[k].photons.empty()) continue;
+        SplatParams level = params;
+        level.radius = level_radius(params.radius, static_cast<int>(k) + 1);
+        splat_one_radius(scene, splatter, frame, dense[k], level, caustics_output, settings, seed, light, control,
+                         stats);
+    }
+    return light;
 }
 
 // The photons the view samples' splat takes: all but those stored for the far sides of translucent surfaces
@@ -353,42 +443,30 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
             gather_far_sides(scene, samples, camera, arena.max_concurrency(), photons, settings,
                              splat_params(settings, iteration.radius, photons.emitted), seed, budget, control, stats);
         keep_reflected_photons(photons);
+        // 4½. Photons that gather densely after glossy or sharp parts take a smaller radius (photon_density.h).
+        const size_t photon_count = photons.photons.size();  // the splat's pairs are bounded for all of them
+        const std::vector<PhotonMap> dense = split_radius_levels(photons, iteration.radius, samples.samples.size(),
+                                                                 caustics_output, settings, budget, stats);
 
         // 3. The cluster hierarchy, if the method splats onto one.
         const std::optional<ClusterHierarchy> hierarchy = build_hierarchy(*splatter, samples, camera, control, stats);
 
-        // 5–6. Splat.
+        // 5–6½. Splat, each radius level with its own radius and boundary correction.
         SplatFrame frame{samples, camera, hierarchy ? &*hierarchy : nullptr, iteration.index, arena.max_concurrency()};
         SplatParams params = splat_params(settings, iteration.radius, photons.emitted);
         params.max_pairs_in_memory =
-            fit_pair_cap(budget, splatter->predict_memory(frame, photons.photons.size(), params));
-        const double splat_end = caustics_output ? 0.9 : 0.98;
-        control.begin_stage(std::string("splat (") + to_string(settings.method) + ")", hierarchy ? 0.5 : 0.45,
-                            splat_end);
-        SplatEstimate indirect, caustic;
-        {
-            StageTimer t(stats, "splat");
-            indirect = splatter->splat(frame, photons, params, control, stats);
-            if (caustics_output) {
-                control.begin_stage("caustic splat", splat_end, 0.98);
-                caustic = splat_caustics(*splatter, frame, photons, params, control, stats);
-            }
-        }
-        control.check();
-        result.kernel_estimate = indirect.kernel_estimate;
-
-        // 6½. Boundary correction of kernel estimates.
-        if (settings.boundary_correction && indirect.kernel_estimate && !photons.photons.empty()) {
-            std::vector<std::vector<glm::vec3>*> lights = {&indirect.radiance};
-            if (caustics_output) lights.push_back(&caustic.radiance);
-            correct_boundaries(scene, samples, params, seed, lights, control, stats);
-        }
-        stats.bytes["indirect_light"] = static_cast<double>(indirect.radiance.capacity() * sizeof(glm::vec3));
+            fit_pair_cap(budget, splatter->predict_memory(frame, photon_count, params));
+        control.begin_stage(std::string("splat (") + to_string(settings.method) + ")", hierarchy ? 0.5 : 0.45, 0.98);
+        const SplatLight light =
+            splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output, settings, seed, control,
+                         stats);
+        result.kernel_estimate = light.kernel_estimate;
+        stats.bytes["indirect_light"] = static_cast<double>(light.indirect.capacity() * sizeof(glm::vec3));
 
         // 7. The film.
         control.begin_stage("image", 0.98, 1.0);
         StageTimer t(stats, "image");
-        result.film = develop_film(samples, direct, indirect.radiance, caustics_output ? &caustic.radiance : nullptr,
+        result.film = develop_film(samples, direct, light.indirect, caustics_output ? &light.caustic : nullptr,
                                    far_sides, settings, stats);
         // Validation bounds every input, but products of extreme ones (1e10 W over a 1e15 m scene) can still leave
         // float's range: say so rather than hand back a frame with infinities in it.

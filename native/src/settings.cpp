@@ -106,6 +106,10 @@ const std::vector<Setting>& render_settings_table() {
          "Divide each pixel's bounced light by the part of its kernel that lies on a surface like its own, so "
          "corners, edges and thin parts are not darkened (glossy surfaces and Directional's approximate iterations "
          "excepted); off gives the paper's plain estimate"),
+        unbounded("adaptive_radius", &S::adaptive_radius,
+         "Photons that gather far more densely than usual (focused caustics) splat with a half or a quarter of the "
+         "radius, so that each disc holds about as many photons as a usual one: sharper caustics at the same "
+         "noise; off splats every photon with one radius"),
         {"directional_level", &S::directional_level, inclusive(-1), inclusive(64), U::none, "-1 = chosen from the radius",
          "Directional method only: hierarchy level (from the leaves) where photons stop; -1 chooses it from the "
          "radius"},

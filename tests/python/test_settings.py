@@ -63,7 +63,7 @@ def test_values_of_another_kind_are_type_errors_naming_the_setting():
 def test_every_setting_round_trips_through_keywords_properties_and_repr():
     changed = dict(photons=1234, radius=0.25, method="gather", max_bounces=3, seed=2**63 + 5, threads=2,
                    direct_samples=2, normal_tolerance=45.0, plane_distance=0.5, kernel="epanechnikov",
-                   boundary_correction=False, directional_level=2, memory_budget=2**40, guide_photons=False,
+                   boundary_correction=False, adaptive_radius=False, directional_level=2, memory_budget=2**40, guide_photons=False,
                    aimed_photons=0.5, caustics_pass=True, transparent=True, iterations=0, time_limit=2.5, alpha=0.5,
                    outputs=("combined", "direct", "depth"))
     assert set(changed) == set(NAMES), "a new setting: add a value for it here"

@@ -20,6 +20,9 @@ enum PhotonFlags : uint32_t {
     // (ViewSamples::far_side, render.cpp).
     kFarSidePhoton = 4u,
     kFarSideOnly = 8u,  // ... and that surface reflects nothing: only they do, the splat of the view samples never
+    // Its last scatter (transparency aside) was a glossy, mirror or refracting part: light such parts may have
+    // focused. Only these can take a smaller radius (photon_density.h).
+    kAfterGlossy = 16u,
 };
 
 // The share of a photon's light that Cycles' Caustics toggles (Light Paths, reflective and refractive off) remove,

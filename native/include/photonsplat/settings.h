@@ -33,6 +33,9 @@ struct RenderSettings {
     // (kernel_coverage.h): removes the darkening of corners, edges and thin parts (boundary bias). Every method
     // but directional, whose blocks are not kernel discs (it is corrected where it falls back to exact).
     bool boundary_correction = true;
+    // Photons where they gather many times more densely than usual (focused caustics) splat with a half or a
+    // quarter of the radius, so that their discs hold about as many photons as usual (photon_density.h).
+    bool adaptive_radius = true;
     int directional_level = -1;       // directional method: hierarchy level from the leaves; -1 = from the radius
     uint64_t memory_budget = 0;       // bytes the render may hold; 0 = 3/4 of available memory (memory_budget.h)
     bool guide_photons = true;        // emit sun photons where pilot paths found them stored (emission_guide.h)

@@ -73,8 +73,9 @@ public:
     virtual SplatMemory predict_memory(const SplatFrame& frame, size_t photons, const SplatParams& params) const = 0;
 
     // The indirect radiance every view sample receives from `photons`. An iteration calls it once per photon set
-    // it splats (all photons, then the caustic photons alone when the caustics output is asked for), with the
-    // same frame and params. Throws InvalidInput, Cancelled.
+    // it splats (the photons of each radius level, photon_density.h, and of each the caustic photons alone when
+    // the caustics output is asked for), with the same frame; the params differ only in their radius, never
+    // above the first call's. Throws InvalidInput, Cancelled.
     virtual SplatEstimate splat(const SplatFrame& frame, const PhotonMap& photons, const SplatParams& params,
                                 const RenderControl& control, Stats& stats) const = 0;
 };
