@@ -7,7 +7,8 @@ own settings with the levels on and off, alternately, in one Blender process.
 Per setting: --rounds rounds of --iterations progressive iterations each (a fresh render each round, the rounds of
 the two settings interleaved), the median over rounds of the seconds per iteration, and, with the levels on, the
 seconds of the levels' own stage (stats "radius_levels": the photons' density and their split) and the photons
-per level. A benchmark, not a test: run it on a quiet machine and compare the two columns of one run.
+per level, and the splat's and the boundary correction's seconds with each setting (the levels' splats and
+corrections are counted in those). A benchmark, not a test: run it on a quiet machine and compare the two columns of one run.
 """
 import argparse
 import statistics
@@ -18,6 +19,9 @@ import bpy
 
 from photonsplat import _core as core
 from photonsplat import export
+
+
+STAGES = ("radius_levels", "splat", "kernel_coverage")
 
 
 def parse_args():
@@ -42,7 +46,8 @@ def run_round(frame, adaptive, iterations, threads):
         progressive.step()
     seconds = (time.perf_counter() - start) / iterations
     stats = progressive.stats()
-    return seconds, stats["seconds"].get("radius_levels", 0.0) / iterations, stats["counters"]
+    stages = {k: stats["seconds"].get(k, 0.0) / iterations for k in STAGES}
+    return seconds, stages, stats["counters"]
 
 
 def main():
@@ -59,13 +64,16 @@ def main():
             rounds[adaptive].append(run_round(frame, adaptive, args.iterations, args.threads))
     off = statistics.median(r[0] for r in rounds[False])
     on = statistics.median(r[0] for r in rounds[True])
-    stage = statistics.median(r[1] for r in rounds[True])
+    stage = {k: (statistics.median(r[1][k] for r in rounds[False]), statistics.median(r[1][k] for r in rounds[True]))
+             for k in STAGES}
     counters = rounds[True][-1][2]
     emitted = counters.get("photons_stored", 0.0)
     levels = [counters.get(f"photons_radius_level_{k}", 0.0) for k in (1, 2)]
     name = bpy.path.basename(bpy.data.filepath) or "(unsaved)"
     width, height = scene.render.resolution_x, scene.render.resolution_y
-    print(f"| {name} {width}x{height} | {off:.3f} | {on:.3f} | {on / off:.3f} | {stage:.4f} | "
+    print(f"| {name} {width}x{height} | {off:.3f} | {on:.3f} | {on / off:.3f} | {stage['radius_levels'][1]:.4f} | "
+          f"{stage['splat'][0]:.3f} → {stage['splat'][1]:.3f} | "
+          f"{stage['kernel_coverage'][0]:.3f} → {stage['kernel_coverage'][1]:.3f} | "
           f"{levels[0] / max(emitted, 1):.2%} / {levels[1] / max(emitted, 1):.2%} |", flush=True)
 
 

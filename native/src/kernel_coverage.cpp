@@ -173,7 +173,8 @@ bool for_each_sample(size_t count, const RenderControl& control, const Body& bod
 }  // namespace
 
 std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& samples, const SplatParams& params,
-                                   uint64_t seed, const RenderControl& control, Stats& stats) {
+                                   uint64_t seed, const RenderControl& control, Stats& stats,
+                                   const std::vector<uint8_t>* wanted) {
     const size_t count = samples.samples.size();
     std::vector<float> coverage(count, 1.0f);
     if (count == 0 || !(params.radius > 0.0f)) return coverage;
@@ -185,8 +186,9 @@ std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& sample
     // seed 184's walls alone: 0.9965 of Cycles, 0.9999 as Lambert walls). The coverage of a sample with diffuse
     // share d is 1 − (1 − c) d, set once the grid's raw coverages have been blended.
     std::vector<float> share(count, 0.0f);
-    bool done =
-        for_each_sample(count, control, [&](size_t i) { share[i] = diffuse_share(samples.samples[i], samples.lobes); });
+    bool done = for_each_sample(count, control, [&](size_t i) {
+        if (!wanted || (*wanted)[i]) share[i] = diffuse_share(samples.samples[i], samples.lobes);
+    });
     const auto probed = [&](size_t i) { return share[i] > 0.0f; };
     // The coverage changes over the kernel's width, many pixels wide: only the pixels of a grid (every
     // kGridStep-th column and row) are probed, and the others take the bilinear blend of the four grid pixels

@@ -113,10 +113,19 @@ SplatEstimate splat_caustics(const Splatter& splatter, const SplatFrame& frame, 
 
 // Stage 6½: divides each sample's splatted light by the part of its kernel on a like-facing surface
 // (kernel_coverage.h). Only kernel estimates are rescaled.
+// With `lit_only`, only the samples that received some of that light are measured (kernel_coverage.h).
 void correct_boundaries(const Scene& scene, const ViewSamples& samples, const SplatParams& params, uint64_t seed,
-                        std::vector<std::vector<glm::vec3>*> lights, RenderControl& control, Stats& stats) {
+                        std::vector<std::vector<glm::vec3>*> lights, bool lit_only, RenderControl& control,
+                        Stats& stats) {
     StageTimer t(stats, "kernel_coverage");
-    const std::vector<float> coverage = kernel_coverage(scene, samples, params, seed, control, stats);
+    std::vector<uint8_t> lit;
+    if (lit_only) {
+        lit.assign(samples.samples.size(), 0);
+        for (const std::vector<glm::vec3>* light : lights)
+            for (size_t i = 0; i < lit.size(); ++i) lit[i] |= (*light)[i] != glm::vec3(0.0f) ? 1 : 0;
+    }
+    const std::vector<float> coverage =
+        kernel_coverage(scene, samples, params, seed, control, stats, lit_only ? &lit : nullptr);
     for (std::vector<glm::vec3>* light : lights)
         for (size_t i = 0; i < coverage.size(); ++i) (*light)[i] /= coverage[i];
 }
@@ -128,10 +137,11 @@ struct SplatLight {
 };
 
 // Stages 5–6½ for the photons of one radius: the splat (and the caustic splat), then the boundary correction of
-// kernel estimates at that radius. Adds to `light`.
+// kernel estimates at that radius (of the samples they lit alone, for a radius level's few photons). Adds to
+// `light`.
 void splat_one_radius(const Scene& scene, const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
-                      const SplatParams& params, bool caustics_output, const RenderSettings& settings, uint64_t seed,
-                      SplatLight& light, RenderControl& control, Stats& stats) {
+                      const SplatParams& params, bool level, bool caustics_output, const RenderSettings& settings,
+                      uint64_t seed, SplatLight& light, RenderControl& control, Stats& stats) {
     SplatEstimate indirect, caustic;
     {
         StageTimer t(stats, "splat");
@@ -143,7 +153,7 @@ void splat_one_radius(const Scene& scene, const Splatter& splatter, const SplatF
     if (settings.boundary_correction && indirect.kernel_estimate && !photons.photons.empty()) {
         std::vector<std::vector<glm::vec3>*> lights = {&indirect.radiance};
         if (caustics_output) lights.push_back(&caustic.radiance);
-        correct_boundaries(scene, frame.samples, params, seed, lights, control, stats);
+        correct_boundaries(scene, frame.samples, params, seed, lights, level, control, stats);
     }
     const auto add = [](std::vector<glm::vec3>& sum, std::vector<glm::vec3>&& part) {
         if (sum.empty()) {
@@ -170,8 +180,10 @@ std::vector<PhotonMap> split_radius_levels(PhotonMap& photons, float radius, siz
         stats.counters["photons_radius_level_" + std::to_string(k)] += double(levels.count[k]);
     const size_t moved = photons.photons.size() - levels.count[0];
     if (moved > 0) {
+        // (and the mask of the samples a level lit, whose coverage its correction measures)
         budget.reserve("radius_level_photons",
-                       double(moved) * sizeof(Photon) + (caustics_output ? 2.0 : 1.0) * predict_per_sample_light_bytes(samples),
+                       double(moved) * sizeof(Photon) +
+                           (caustics_output ? 2.0 : 1.0) * predict_per_sample_light_bytes(samples) + double(samples),
                        "photons");
         for (int k = 1; k < kRadiusLevels; ++k) {
             dense.emplace_back();
@@ -199,12 +211,13 @@ SplatLight splat_levels(const Scene& scene, const Splatter& splatter, const Spla
                         const std::vector<PhotonMap>& dense, const SplatParams& params, bool caustics_output,
                         const RenderSettings& settings, uint64_t seed, RenderControl& control, Stats& stats) {
     SplatLight light;
-    splat_one_radius(scene, splatter, frame, photons, params, caustics_output, settings, seed, light, control, stats);
+    splat_one_radius(scene, splatter, frame, photons, params, false, caustics_output, settings, seed, light, control,
+                     stats);
     for (size_t k = 0; k < dense.size(); ++k) {
         if (dense[k].photons.empty()) continue;
         SplatParams level = params;
         level.radius = level_radius(params.radius, static_cast<int>(k) + 1);
-        splat_one_radius(scene, splatter, frame, dense[k], level, caustics_output, settings, seed, light, control,
+        splat_one_radius(scene, splatter, frame, dense[k], level, true, caustics_output, settings, seed, light, control,
                          stats);
     }
     return light;

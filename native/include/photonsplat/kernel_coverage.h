@@ -29,8 +29,12 @@ constexpr float kMinCoverage = 0.25f;
 // cosine of its tilt) and the kernel's weight at its distance. Mirrors and glass are passed through (photons
 // land on what lies behind them). Glossy parts keep their estimate: a sample's coverage c is taken as
 // 1 − (1 − c) d, d its diffuse-like share (kernel_coverage.cpp says why). One probe pattern, drawn from (seed,
-// kernel_coverage), serves every sample. Multi-threaded, deterministic for a seed.
+// kernel_coverage), serves every sample. Multi-threaded, deterministic for a seed. With `wanted` (index-aligned
+// with samples.samples), only the samples it marks are measured and the others keep 1: a radius level's light
+// (photon_density.h) reaches few samples, and a small radius blends few grid pixels, so measuring all would cost
+// several times the whole frame's correction.
 std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& samples, const SplatParams& params,
-                                   uint64_t seed, const RenderControl& control, Stats& stats);
+                                   uint64_t seed, const RenderControl& control, Stats& stats,
+                                   const std::vector<uint8_t>* wanted = nullptr);
 
 }  // namespace ps
