@@ -7,7 +7,6 @@
 #include <glm/common.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "photonsplat/stats.h"
 
@@ -26,24 +25,39 @@ size_t table_capacity(size_t photons) {
     return capacity;
 }
 
-// Photon counts per cell: an open-addressing table (linear probing) from a cell's packed coordinates.
-class CellCounts {
+// What a cell (or a box of cells) holds: its photons, and the sums of their weights (power's luminance) and of
+// their squares, whose ratio (Σw)² / Σw² is the number of equal photons as noisy as they are.
+struct Tally {
+    uint32_t count = 0;
+    float weight = 0.0f, weight_squared = 0.0f;
+    void add(const Tally& t) {
+        count += t.count;
+        weight += t.weight;
+        weight_squared += t.weight_squared;
+    }
+    double effective() const {
+        return weight_squared > 0.0f ? double(weight) * double(weight) / double(weight_squared) : 0.0;
+    }
+};
+
+// Tallies per cell: an open-addressing table (linear probing) from a cell's packed coordinates.
+class CellTallies {
 public:
-    explicit CellCounts(size_t photons) {
+    explicit CellTallies(size_t photons) {
         const size_t capacity = table_capacity(photons);
         keys_.assign(capacity, kEmpty);
-        counts_.assign(capacity, 0u);
+        tallies_.assign(capacity, Tally{});
         mask_ = capacity - 1;
         while ((size_t(1) << bits_) < capacity) ++bits_;
     }
-    void add(uint64_t key, uint32_t n) { counts_[slot(key)] += n; }
-    uint32_t count(uint64_t key) const {
+    void add(uint64_t key, const Tally& t) { tallies_[slot(key)].add(t); }
+    Tally tally(uint64_t key) const {
         for (size_t i = hash(key);; i = (i + 1) & mask_) {
-            if (keys_[i] == key) return counts_[i];
-            if (keys_[i] == kEmpty) return 0u;
+            if (keys_[i] == key) return tallies_[i];
+            if (keys_[i] == kEmpty) return Tally{};
         }
     }
-    size_t bytes() const { return keys_.capacity() * sizeof(uint64_t) + counts_.capacity() * sizeof(uint32_t); }
+    size_t bytes() const { return keys_.capacity() * sizeof(uint64_t) + tallies_.capacity() * sizeof(Tally); }
 
 private:
     static constexpr uint64_t kEmpty = ~0ull;
@@ -59,7 +73,7 @@ private:
         }
     }
     std::vector<uint64_t> keys_;
-    std::vector<uint32_t> counts_;
+    std::vector<Tally> tallies_;
     size_t mask_ = 0;
     int bits_ = 0;
 };
@@ -78,51 +92,57 @@ struct Grid {
     uint64_t cell_of(const glm::vec3& q) const { return pack(coordinate(q, 0.0, 0), coordinate(q, 0.0, 1), coordinate(q, 0.0, 2)); }
 };
 
-// The photons of `subset` (indices into `photons`, finite ones) counted per cell, then each one's count: that of
-// the 2 × 2 × 2 cells whose centres are nearest it. Both passes follow the map's Morton order: runs of photons in
-// one cell are added at once, and consecutive photons mostly share their box, whose sum is kept until it changes.
-std::vector<uint32_t> box_counts(const std::vector<Photon>& photons, const std::vector<uint32_t>& subset,
-                                 const Grid& grid, double& bytes) {
-    CellCounts cells(subset.size());
+Tally tally_of(const Photon& p) {
+    const float w = 0.2126f * p.power.x + 0.7152f * p.power.y + 0.0722f * p.power.z;
+    const float weight = std::isfinite(w) ? std::max(w, 0.0f) : 0.0f;
+    return Tally{1u, weight, weight * weight};
+}
+
+// The photons of `subset` (indices into `photons`, finite ones) tallied per cell, then each one's box: the 2 × 2 × 2
+// cells whose centres are nearest it. Both passes follow the map's Morton order: runs of photons in one cell are
+// added at once, and consecutive photons mostly share their box, whose tally is kept until it changes.
+std::vector<Tally> box_tallies(const std::vector<Photon>& photons, const std::vector<uint32_t>& subset,
+                               const Grid& grid, double& bytes) {
+    CellTallies cells(subset.size());
     uint64_t run_key = 0;
-    uint32_t run = 0;
+    Tally run;
     for (uint32_t i : subset) {
         const uint64_t key = grid.cell_of(photons[i].position);
-        if (run > 0 && key != run_key) cells.add(run_key, run), run = 0;
+        if (run.count > 0 && key != run_key) cells.add(run_key, run), run = Tally{};
         run_key = key;
-        ++run;
+        run.add(tally_of(photons[i]));
     }
-    if (run > 0) cells.add(run_key, run);
-    std::vector<uint32_t> count(subset.size(), 0u);
+    if (run.count > 0) cells.add(run_key, run);
+    std::vector<Tally> boxes(subset.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, subset.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         uint64_t last = ~0ull;
-        uint32_t sum = 0;
+        Tally box;
         for (size_t j = r.begin(); j != r.end(); ++j) {
             const glm::vec3& q = photons[subset[j]].position;
             const uint64_t x = grid.coordinate(q, 0.5, 0), y = grid.coordinate(q, 0.5, 1), z = grid.coordinate(q, 0.5, 2);
-            const uint64_t box = pack(x, y, z);
-            if (box != last) {
-                sum = 0;
-                for (int c = 0; c < 8; ++c) sum += cells.count(pack(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)));
-                last = box;
+            const uint64_t key = pack(x, y, z);
+            if (key != last) {
+                box = Tally{};
+                for (int c = 0; c < 8; ++c) box.add(cells.tally(pack(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2))));
+                last = key;
             }
-            count[j] = sum;
+            boxes[j] = box;
         }
     });
-    bytes += double(cells.bytes()) + double(count.capacity()) * sizeof(uint32_t);
-    return count;
+    bytes += double(cells.bytes()) + double(boxes.capacity()) * sizeof(Tally);
+    return boxes;
 }
 
-// The median of counts over the surface they light: each weighing 1 / itself, the area its photon stands for.
-// Summed in sorted order: the same figure whatever the threads.
-double area_median(std::vector<uint32_t> counts) {
-    tbb::parallel_sort(counts.begin(), counts.end());
+// The median of the boxes' effective counts over the surface they light: each weighing 1 / its box's count, the
+// area its photon stands for. Summed in sorted order: the same figure whatever the threads.
+double area_median(std::vector<Tally> boxes) {
+    std::sort(boxes.begin(), boxes.end(), [](const Tally& a, const Tally& b) { return a.effective() < b.effective(); });
     double area = 0.0;
-    for (uint32_t c : counts) area += c > 0 ? 1.0 / c : 0.0;
+    for (const Tally& t : boxes) area += t.count > 0 ? 1.0 / t.count : 0.0;
     double below = 0.0;
-    for (uint32_t c : counts) {
-        below += c > 0 ? 1.0 / c : 0.0;
-        if (below >= 0.5 * area) return c;
+    for (const Tally& t : boxes) {
+        below += t.count > 0 ? 1.0 / t.count : 0.0;
+        if (below >= 0.5 * area) return t.effective();
     }
     return 0.0;
 }
@@ -130,10 +150,10 @@ double area_median(std::vector<uint32_t> counts) {
 }  // namespace
 
 double predict_radius_level_bytes(size_t photons) {
-    // The candidates' and the sample's indices, tables and counts, and the levels.
+    // The candidates' and the sample's indices, tables and boxes, and the levels.
     const size_t sample = std::min(photons, kTypicalSample);
-    return double(table_capacity(photons) + table_capacity(sample)) * (sizeof(uint64_t) + sizeof(uint32_t)) +
-           double(2 * photons + 2 * sample) * sizeof(uint32_t) + double(photons);
+    return double(table_capacity(photons) + table_capacity(sample)) * (sizeof(uint64_t) + sizeof(Tally)) +
+           double(photons + sample) * (sizeof(uint32_t) + sizeof(Tally)) + double(photons);
 }
 
 RadiusLevels photon_radius_levels(const PhotonMap& map, float radius, Stats& stats) {
@@ -167,14 +187,14 @@ RadiusLevels photon_radius_levels(const PhotonMap& map, float radius, Stats& sta
     for (size_t i = 0; i < photons.size(); i += stride)
         if (finite(photons[i])) sample.push_back(static_cast<uint32_t>(i));
     double bytes = double(candidates.capacity() + sample.capacity()) * sizeof(uint32_t);
-    out.typical = double(stride) * area_median(box_counts(photons, sample, grid, bytes));
+    out.typical = double(stride) * area_median(box_tallies(photons, sample, grid, bytes));
 
     // The candidates' counts among themselves: a level's splat holds only its own photons.
-    const std::vector<uint32_t> count = box_counts(photons, candidates, grid, bytes);
+    const std::vector<Tally> boxes = box_tallies(photons, candidates, grid, bytes);
     const double base = std::max(out.typical, kMinTypicalCount);
     for (size_t j = 0; j < candidates.size(); ++j) {
         int k = 0;
-        while (k + 1 < kRadiusLevels && double(count[j]) >= base * double(1u << (2 * (k + 1)))) ++k;
+        while (k + 1 < kRadiusLevels && boxes[j].effective() >= base * double(1u << (2 * (k + 1)))) ++k;
         out.level[candidates[j]] = static_cast<uint8_t>(k);
         --out.count[0];
         ++out.count[k];
