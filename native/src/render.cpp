@@ -137,23 +137,32 @@ struct SplatLight {
 };
 
 // Stages 5–6½ for the photons of one radius: the splat (and the caustic splat), then the boundary correction of
-// kernel estimates at that radius (of the samples they lit alone, for a radius level's few photons). Adds to
-// `light`.
+// kernel estimates at that radius (of the samples they lit alone, for a radius level's few photons; `level` 0 is
+// the iteration's radius). Adds to `light`.
+// Its progress runs from `begin` to `end`: the caustic splat takes the last tenth.
 void splat_one_radius(const Scene& scene, const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
-                      const SplatParams& params, bool level, bool caustics_output, const RenderSettings& settings,
-                      uint64_t seed, SplatLight& light, RenderControl& control, Stats& stats) {
+                      const SplatParams& params, int level, bool caustics_output, const RenderSettings& settings,
+                      uint64_t seed, double begin, double end, SplatLight& light, RenderControl& control,
+                      Stats& stats) {
     SplatEstimate indirect, caustic;
     {
         StageTimer t(stats, "splat");
+        const double middle = caustics_output ? end - 0.1 * (end - begin) : end;
+        const std::string name = std::string("splat (") + to_string(settings.method) + ")";
+        const std::string radius = level > 0 ? ", radius / " + std::to_string(1 << level) : "";
+        control.begin_stage(name + radius, begin, middle);
         indirect = splatter.splat(frame, photons, params, control, stats);
-        if (caustics_output) caustic = splat_caustics(splatter, frame, photons, params, control, stats);
+        if (caustics_output) {
+            control.begin_stage("caustic splat" + radius, middle, end);
+            caustic = splat_caustics(splatter, frame, photons, params, control, stats);
+        }
     }
     control.check();
     light.kernel_estimate = light.kernel_estimate && indirect.kernel_estimate;
     if (settings.boundary_correction && indirect.kernel_estimate && !photons.photons.empty()) {
         std::vector<std::vector<glm::vec3>*> lights = {&indirect.radiance};
         if (caustics_output) lights.push_back(&caustic.radiance);
-        correct_boundaries(scene, frame.samples, params, seed, lights, level, control, stats);
+        correct_boundaries(scene, frame.samples, params, seed, lights, level > 0, control, stats);
     }
     const auto add = [](std::vector<glm::vec3>& sum, std::vector<glm::vec3>&& part) {
         if (sum.empty()) {
@@ -209,16 +218,24 @@ std::vector<PhotonMap> split_radius_levels(PhotonMap& photons, float radius, siz
 // Without levels, exactly the one splat of the iteration's radius.
 SplatLight splat_levels(const Scene& scene, const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
                         const std::vector<PhotonMap>& dense, const SplatParams& params, bool caustics_output,
-                        const RenderSettings& settings, uint64_t seed, RenderControl& control, Stats& stats) {
+                        const RenderSettings& settings, uint64_t seed, double begin, double end,
+                        RenderControl& control, Stats& stats) {
+    // The progress from `begin` to `end`, shared by the splats in proportion to their photons.
+    double total = double(photons.photons.size());
+    for (const PhotonMap& m : dense) total += double(m.photons.size());
+    const auto share = [&](const PhotonMap& m) { return total > 0.0 ? (end - begin) * m.photons.size() / total : 0.0; };
     SplatLight light;
-    splat_one_radius(scene, splatter, frame, photons, params, false, caustics_output, settings, seed, light, control,
-                     stats);
+    double at = dense.empty() ? end : begin + share(photons);
+    splat_one_radius(scene, splatter, frame, photons, params, 0, caustics_output, settings, seed, begin, at, light,
+                     control, stats);
     for (size_t k = 0; k < dense.size(); ++k) {
         if (dense[k].photons.empty()) continue;
         SplatParams level = params;
         level.radius = level_radius(params.radius, static_cast<int>(k) + 1);
-        splat_one_radius(scene, splatter, frame, dense[k], level, true, caustics_output, settings, seed, light, control,
-                         stats);
+        const double from = at;
+        at = std::min(end, at + share(dense[k]));
+        splat_one_radius(scene, splatter, frame, dense[k], level, static_cast<int>(k) + 1, caustics_output, settings,
+                         seed, from, at, light, control, stats);
     }
     return light;
 }
@@ -469,10 +486,8 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         SplatParams params = splat_params(settings, iteration.radius, photons.emitted);
         params.max_pairs_in_memory =
             fit_pair_cap(budget, splatter->predict_memory(frame, photon_count, params));
-        control.begin_stage(std::string("splat (") + to_string(settings.method) + ")", hierarchy ? 0.5 : 0.45, 0.98);
-        const SplatLight light =
-            splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output, settings, seed, control,
-                         stats);
+        const SplatLight light = splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output,
+                                              settings, seed, hierarchy ? 0.5 : 0.45, 0.98, control, stats);
         result.kernel_estimate = light.kernel_estimate;
         stats.bytes["indirect_light"] = static_cast<double>(light.indirect.capacity() * sizeof(glm::vec3));
 
