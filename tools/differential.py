@@ -31,7 +31,8 @@ Per scene:
   - The reference renderer (docs/reference.md) as Cycles: two seeds of --reference-samples each, doubled while
     their means differ by more than --reference-agree, up to --reference-max-samples. --reference-only renders
     it again for scenes that have results.
-  - Photon Splat progressive with the scene's own settings (as F12 renders it) but 16 bounces, two threads, its image taken when
+  - Photon Splat progressive with the scene's own settings (as F12 renders it; --setting NAME=VALUE overrides one, to
+    measure a change against its toggle on one set of oracles) but 16 bounces, two threads, its image taken when
     the process's CPU time reaches 2 x 1, 4 and 16 s (1, 4 and 16 s on two busy cores: CPU time is what a shared
     machine's load changes least), with its Caustics pass.
 Figures:
@@ -795,6 +796,17 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   −0.56; seed 56 0.941 → 0.963 (the reference 0.962), its block relMSE halved. Gathering every photon on the far
   side instead of going on blurred a translucent Suzanne's inside, lit through its own walls (seed 7: block relMSE
   at 16 s 0.00014 → 0.0017; 0.00016 now). Tests: `test_translucency.cpp`. Measured in "Stop 39" below.
+- **A focused caustic was blurred by the radius chosen for the scene's ordinary light** (kernel bias; Photon Splat
+  only). One radius for every photon spreads a caustic a few pixels wide over the kernel's disc. Since stop 40
+  photons whose last scatter was glossy, a mirror or a refraction, where they gather 4 or 16 times as densely as
+  photons usually do over the lit surface (weighed by their powers), splat with a half or a quarter of the radius,
+  each level by the settings' method and with its own boundary correction (`photon_density.h`, setting
+  `adaptive_radius`). Against one Cycles pair each, one radius → levels: seed 0 (a floor's caustic streak under a
+  rough Principled glass torus) its lit blocks 0.91–1.34 of Cycles after 16 s → 0.97–1.01, the block relMSE 19 times
+  lower, the slope −0.14 → −1.61; seed 128 (a mirror ball's caustic on an Oren–Nayar torus) its caustic energy 0.79
+  → 0.92; seed 198 0.944 → 1.026. Elsewhere the error moves within a run's own noise. Test:
+  `RadiusLevels.AFocusedCausticIsSharperAtTheSameEnergy` (a glass ball's caustic on a floor: its centre 2 × 2 pixels
+  0.26 of the reference with one radius, 0.90 with levels, the image's light the same). Measured in "Stop 40" below.
 
 Fixed in the reference renderer (each with its test in `tests/python/test_reference.py`):
 
@@ -876,11 +888,6 @@ Found, not fixed yet (Photon Splat only; the reference agrees with Cycles):
   transparency or rough transmission since the light, and have its branch drop what it finds after such a chain
   alone (lights it meets, the next-event estimates of rough transmission). Every splatting method would have to
   weigh a photon's lobes by its history.
-- **A caustic on a small curved surface is blurred dim** (kernel bias near geometry). Seed 128: the caustic of a
-  mirror ball on an Oren–Nayar torus is 0.69 of Cycles' Caustics excess after 40 passes (the reference 1.01 of
-  the whole block); with 4 times the photons (a smaller radius) 0.93, with Boundary Correction off 0.50. The
-  radius is the scene's, not the caustic's: caustic photons are dense where they focus and could take a radius
-  of their own.
 
 Found, not fixed yet (the reference; the second both):
 

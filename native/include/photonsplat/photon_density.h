@@ -11,14 +11,14 @@
 // focused (kAfterGlossy): these are the candidates; every other photon keeps the radius, and a scene without such
 // parts pays for nothing but a look at the flags.
 //
-// Density. Photons are counted on a grid of cells of the radius's size; a photon's count is that of the 2 × 2 × 2
-// cells nearest it (a box about the kernel's diameter wide). The typical count is taken over all photons (every
-// stride-th of them, at most kTypicalSample, times the stride) as the median over the lit surface, not over photons
-// (which would make a caustic holding most photons "typical"): each photon weighs as the area it stands for, 1 / its
-// count. A candidate's own count is among the candidates alone, since a level's splat holds only its own photons;
-// where it is 4^k times the typical count or more (and 4^k times kMinTypicalCount), the candidate takes level k, up
-// to kRadiusLevels − 1. Counts, not powers: a photon's noise in its disc is taken as that of as many photons of
-// equal power.
+// Density. Photons are tallied on a grid of cells of the radius's size; a photon's box is the 2 × 2 × 2 cells
+// nearest it (about the kernel's diameter wide), and what counts is the box's effective number of photons,
+// (Σw)² / Σw² with w a photon's power (luminance): a box of a few strong photons and many weak ones is as noisy as
+// a few equal ones. The typical number is taken over all photons (every stride-th of them, at most kTypicalSample,
+// times the stride) as the median over the lit surface, not over photons (which would make a caustic holding most
+// photons "typical"): each photon weighs as the area it stands for, 1 / its box's count. A candidate's own number
+// is among the candidates alone, since a level's splat holds only its own photons; where it is 4^k times the typical
+// one or more (and 4^k times kMinTypicalCount), the candidate takes level k, up to kRadiusLevels − 1.
 //
 // Every level's photons are splatted by the same method with that level's radius, and each level's light is
 // corrected for boundaries with its own radius (render.cpp): the estimate stays consistent, since every radius
@@ -40,7 +40,7 @@ constexpr double kMinTypicalCount = 16;  // a level's disc holds at least about 
 struct RadiusLevels {
     std::vector<uint8_t> level;       // per photon of the map, index-aligned
     size_t count[kRadiusLevels] = {};  // photons per level
-    double typical = 0.0;             // the typical count of a box (diagnostics)
+    double typical = 0.0;             // the typical effective number of photons in a box (diagnostics)
 };
 
 // The radius level of every photon of `photons` splatted with `radius` (render space is not needed: only
