@@ -135,33 +135,16 @@ struct FocusedCaustic {
     }
 
     std::vector<float> photon_splat(bool adaptive, int iterations, Stats* stats = nullptr) const {
-        RenderSettings s = settings(adaptive);
-        s.iterations = iterations;
-        RenderControl control;
-        ProgressiveRender progressive(scene, camera, s);
-        for (int i = 0; i < iterations; ++i) progressive.run_iteration(control);
-        if (stats) *stats = progressive.stats();
-        return progressive.result().rgba();
+        return test::progressive_image(scene, camera, settings(adaptive), iterations, stats);
     }
 
-    std::vector<float> reference(int samples) const {
-        ReferenceSettings s;
-        s.samples = samples;
-        s.threads = 2;
-        RenderControl control;
-        return render_reference(scene, camera, s, control).rgba;
-    }
+    std::vector<float> reference(int samples) const { return test::reference_image(scene, camera, samples); }
 };
 
 // Mean of the RGB of pixels [x0, x1) × [y0, y1) of a 32 × 32 RGBA image.
 double block_mean(const std::vector<float>& rgba, int x0, int x1, int y0, int y1) {
-    double sum = 0.0;
-    for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x)
-            for (int c = 0; c < 3; ++c) sum += rgba[(size_t(y) * 32 + x) * 4 + c];
-    return sum / (3.0 * (x1 - x0) * (y1 - y0));
+    return test::block_mean(rgba, 32, x0, x1, y0, y1);
 }
-
 // Measured (8 iterations of 40 000 photons, the reference at 256 samples): the caustic's centre 2 × 2 pixels
 // 0.90 of the reference (0.26 with one radius), the 4 × 4 around it 0.94 (0.51), the image 0.994 (1.001).
 TEST(RadiusLevels, AFocusedCausticIsSharperAtTheSameEnergy) {

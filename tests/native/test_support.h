@@ -27,6 +27,8 @@
 #include "photonsplat/errors.h"
 #include "photonsplat/hierarchy.h"
 #include "photonsplat/photons.h"
+#include "photonsplat/progressive.h"
+#include "photonsplat/reference.h"
 #include "photonsplat/render.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/scene.h"
@@ -546,6 +548,37 @@ inline double seconds_until_cancelled(RenderControl& control, std::chrono::milli
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     canceller.join();
     return seconds;
+}
+
+// ---- images of whole renders ------------------------------------------------------------------------------
+
+// The RGBA image of `iterations` progressive iterations with `settings` (and its stats, where asked for).
+inline std::vector<float> progressive_image(const Scene& scene, const Camera& camera, RenderSettings settings,
+                                            int iterations, Stats* stats = nullptr) {
+    settings.iterations = iterations;
+    RenderControl control;
+    ProgressiveRender progressive(scene, camera, settings);
+    for (int i = 0; i < iterations; ++i) progressive.run_iteration(control);
+    if (stats) *stats = progressive.stats();
+    return progressive.result().rgba();
+}
+
+// The reference renderer's RGBA image at `samples` per pixel, on two threads.
+inline std::vector<float> reference_image(const Scene& scene, const Camera& camera, int samples) {
+    ReferenceSettings settings;
+    settings.samples = samples;
+    settings.threads = 2;
+    RenderControl control;
+    return render_reference(scene, camera, settings, control).rgba;
+}
+
+// Mean of the RGB of pixels [x0, x1) × [y0, y1) of an RGBA image `width` pixels wide.
+inline double block_mean(const std::vector<float>& rgba, int width, int x0, int x1, int y0, int y1) {
+    double sum = 0.0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int c = 0; c < 3; ++c) sum += rgba[(size_t(y) * width + x) * 4 + c];
+    return sum / (3.0 * (x1 - x0) * (y1 - y0));
 }
 
 }  // namespace ps::test

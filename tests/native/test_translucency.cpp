@@ -42,32 +42,17 @@ struct CausticBehindASheet {
     std::vector<float> photon_splat(int iterations) const {
         RenderSettings settings;
         settings.photons = 40000;
-        settings.iterations = iterations;
         settings.threads = 2;
-        RenderControl control;
-        ProgressiveRender progressive(scene, camera, settings);
-        for (int i = 0; i < iterations; ++i) progressive.run_iteration(control);
-        return progressive.result().rgba();
+        return test::progressive_image(scene, camera, settings, iterations);
     }
 
-    std::vector<float> reference(int samples) const {
-        ReferenceSettings settings;
-        settings.samples = samples;
-        settings.threads = 2;
-        RenderControl control;
-        return render_reference(scene, camera, settings, control).rgba;
-    }
+    std::vector<float> reference(int samples) const { return test::reference_image(scene, camera, samples); }
 };
 
 // Mean of the RGB of pixels [x0, x1) × [y0, y1) of a 24 × 24 RGBA image.
 double block_mean(const std::vector<float>& rgba, int x0, int x1, int y0, int y1) {
-    double sum = 0.0;
-    for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x)
-            for (int c = 0; c < 3; ++c) sum += rgba[(size_t(y) * 24 + x) * 4 + c];
-    return sum / (3.0 * (x1 - x0) * (y1 - y0));
+    return test::block_mean(rgba, 24, x0, x1, y0, y1);
 }
-
 TEST(Translucency, CameraPathsKeepTheFarSideOfTheSheet) {
     const CausticBehindASheet s(0.0f);
     RenderControl control;
