@@ -67,14 +67,14 @@ def main():
     stage = {k: (statistics.median(r[1][k] for r in rounds[False]), statistics.median(r[1][k] for r in rounds[True]))
              for k in STAGES}
     counters = rounds[True][-1][2]
-    emitted = counters.get("photons_stored", 0.0)
+    stored = counters.get("photons_stored", 0.0)
     levels = [counters.get(f"photons_radius_level_{k}", 0.0) for k in (1, 2)]
     name = bpy.path.basename(bpy.data.filepath) or "(unsaved)"
     width, height = scene.render.resolution_x, scene.render.resolution_y
     print(f"| {name} {width}x{height} | {off:.3f} | {on:.3f} | {on / off:.3f} | {stage['radius_levels'][1]:.4f} | "
           f"{stage['splat'][0]:.3f} → {stage['splat'][1]:.3f} | "
           f"{stage['kernel_coverage'][0]:.3f} → {stage['kernel_coverage'][1]:.3f} | "
-          f"{levels[0] / max(emitted, 1):.2%} / {levels[1] / max(emitted, 1):.2%} |", flush=True)
+          f"{levels[0] / max(stored, 1):.2%} / {levels[1] / max(stored, 1):.2%} |", flush=True)
 
 
 main()

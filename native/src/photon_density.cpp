@@ -8,14 +8,16 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "photonsplat/scattering.h"
 #include "photonsplat/stats.h"
+#include "photonsplat/validation.h"
 
 namespace ps {
 
 namespace {
 
 constexpr uint64_t kAxisCells = 1ull << 20;  // cells per axis at most (keys hold 21 bits an axis, with margin)
-constexpr size_t kTypicalSample = 65536;     // photons the typical count is taken from, at most
+constexpr size_t kTypicalSample = 65536;     // photons the typical number is taken from, at most
 
 uint64_t pack(uint64_t x, uint64_t y, uint64_t z) { return (z << 42) | (y << 21) | x; }
 
@@ -78,9 +80,9 @@ private:
     int bits_ = 0;
 };
 
-bool finite(const Photon& p) { return std::isfinite(p.position.x + p.position.y + p.position.z); }
+bool finite(const Photon& p) { return is_finite(p.position); }
 
-// The grid the counts are taken on: cells of the radius's size (wider along an axis whose extent would need more
+// The grid the tallies are taken on: cells of the radius's size (wider along an axis whose extent would need more
 // than kAxisCells), from the finite photons' lower corner; coordinates are offset by one so that the cell below
 // the first is 0.
 struct Grid {
@@ -89,11 +91,13 @@ struct Grid {
         const double v = std::floor((double(position[a]) - lo[a]) / cell[a] - shift) + 1.0;
         return static_cast<uint64_t>(std::clamp(v, 0.0, double(kAxisCells)));
     }
-    uint64_t cell_of(const glm::vec3& q) const { return pack(coordinate(q, 0.0, 0), coordinate(q, 0.0, 1), coordinate(q, 0.0, 2)); }
+    uint64_t cell_of(const glm::vec3& q) const {
+        return pack(coordinate(q, 0.0, 0), coordinate(q, 0.0, 1), coordinate(q, 0.0, 2));
+    }
 };
 
 Tally tally_of(const Photon& p) {
-    const float w = 0.2126f * p.power.x + 0.7152f * p.power.y + 0.0722f * p.power.z;
+    const float w = luminance(p.power);
     const float weight = std::isfinite(w) ? std::max(w, 0.0f) : 0.0f;
     return Tally{1u, weight, weight * weight};
 }
@@ -181,7 +185,7 @@ RadiusLevels photon_radius_levels(const PhotonMap& map, float radius, Stats& sta
     }
     for (int a = 0; a < 3; ++a) grid.cell[a] = std::max(double(radius), (hi[a] - grid.lo[a]) / double(kAxisCells - 4));
 
-    // The typical count, from every stride-th finite photon (their counts times the stride).
+    // The typical number, from every stride-th finite photon (their numbers times the stride).
     const size_t stride = (photons.size() + kTypicalSample - 1) / kTypicalSample;
     sample.reserve((photons.size() + stride - 1) / stride);
     for (size_t i = 0; i < photons.size(); i += stride)
@@ -189,7 +193,7 @@ RadiusLevels photon_radius_levels(const PhotonMap& map, float radius, Stats& sta
     double bytes = double(candidates.capacity() + sample.capacity()) * sizeof(uint32_t);
     out.typical = double(stride) * area_median(box_tallies(photons, sample, grid, bytes));
 
-    // The candidates' counts among themselves: a level's splat holds only its own photons.
+    // The candidates' numbers among themselves: a level's splat holds only its own photons.
     const std::vector<Tally> boxes = box_tallies(photons, candidates, grid, bytes);
     const double base = std::max(out.typical, kMinTypicalCount);
     for (size_t j = 0; j < candidates.size(); ++j) {
