@@ -161,7 +161,7 @@ namespace {
 
 // shade() for a given list of closures: the material's own, or those its program set at this hit.
 Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo, const Closure* closures,
-                    size_t closure_count) {
+                    size_t closure_count, bool view_factors = true) {
     Bsdf b;
     const Material& m = *surface.material;
     b.ng = surface.geometric_normal;
@@ -175,7 +175,8 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
     // Fresnel and Layer Weight read Cycles' sd->N, untilted (a program's normal where it makes one).
     const glm::vec3& factor_normal = m.program_normal ? surface.shading_normal : surface.smooth_normal;
     const float cos_no = std::clamp(glm::dot(factor_normal, wo), 0.0f, 1.0f);
-    for (size_t j = 0; j < m.factors.size(); ++j) factor[j] = evaluate_factor(m.factors[j], cos_no, !surface.entering);
+    for (size_t j = 0; j < m.factors.size(); ++j)
+        factor[j] = view_factors ? evaluate_factor(m.factors[j], cos_no, !surface.entering) : 0.5f;
 
     for (size_t ci = 0; ci < closure_count; ++ci) {
         const Closure& c = closures[ci];
@@ -245,6 +246,15 @@ Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo)
     ProgrammedMaterial programmed;
     run_material_program(scene, surface, wo, programmed);
     return shade_closures(scene, surface, wo, programmed.closures, static_cast<size_t>(programmed.closure_count));
+}
+
+Bsdf shade_halfway_factors(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo) {
+    const Material& m = *surface.material;
+    if (!m.programmed) return shade_closures(scene, surface, wo, m.closures.data(), m.closures.size(), false);
+    ProgrammedMaterial programmed;
+    run_material_program(scene, surface, wo, programmed);
+    return shade_closures(scene, surface, wo, programmed.closures, static_cast<size_t>(programmed.closure_count),
+                          false);
 }
 
 bool is_transmission(const Lobe& l) { return l.kind == ClosureKind::translucent || l.kind == ClosureKind::refraction; }

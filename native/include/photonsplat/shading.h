@@ -51,6 +51,10 @@ struct Bsdf {
 // side of surface.geometric_normal). Lobes beyond kMaxLobes are merged into the last (never in practice: the
 // add-on refuses materials with more non-delta closures than that).
 Bsdf shade(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo);
+// shade() with every view-dependent factor (Material::factors: Glass's Fresnel split, Fresnel and Layer Weight
+// mixes) at one half: every closure the factors could weigh in from some view is there. Photons draw their
+// scatter from it where the view they are shaded from is not the one Cycles weighs by (photons.cpp).
+Bsdf shade_halfway_factors(const Scene& scene, const SurfacePoint& surface, const glm::vec3& wo);
 
 // The density Cycles reports for the mirror's direction where its sharp reflection is a Cycles 3.x Multiscatter
 // GGX (Closure::reported_alpha), 0 for a true mirror: an emitter its reflection meets weighs
