@@ -611,23 +611,32 @@ Material rough_pane(float ior, bool reflects) {
     return m;
 }
 
-std::vector<Photon> pane_photons(float ior, bool reflects, float light_height) {
+// The photons of a 10 W lamp at `lamp` over a pane of `pane` (z = 1, reaching `half` from the middle) over a white
+// floor twice as wide (z = 0).
+std::vector<Photon> photons_over_floor(const Material& pane, float half, const glm::vec3& lamp, uint64_t count,
+                                       uint64_t seed) {
     Scene scene;
-    const uint32_t white = scene.add_material({"white", MaterialKind::diffuse, glm::vec3(1.0f), 1.45f, glm::vec3(0.0f)});
-    const uint32_t pane = scene.add_material(rough_pane(ior, reflects));
-    test::add_quad(scene, "floor", {-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}, white);
-    test::add_quad(scene, "pane", {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, pane);
+    const uint32_t white =
+        scene.add_material({"white", MaterialKind::diffuse, glm::vec3(1.0f), 1.45f, glm::vec3(0.0f)});
+    const uint32_t glass = scene.add_material(pane);
+    const float f = 2.0f * half;
+    test::add_quad(scene, "floor", {-f, -f, 0}, {f, -f, 0}, {f, f, 0}, {-f, f, 0}, white);
+    test::add_quad(scene, "pane", {-half, -half, 1}, {half, -half, 1}, {half, half, 1}, {-half, half, 1}, glass);
     Light light;
     light.name = "lamp";
-    light.position = {0.0f, 0.0f, light_height};
+    light.position = lamp;
     light.value = glm::vec3(10.0f);
     scene.add_light(light);
     RenderControl control;
     Stats stats;
     PhotonSettings settings;
-    settings.count = 20000;
-    settings.seed = 3;
+    settings.count = count;
+    settings.seed = seed;
     return trace_photons(scene, settings, control, stats).photons;
+}
+
+std::vector<Photon> pane_photons(float ior, bool reflects, float light_height) {
+    return photons_over_floor(rough_pane(ior, reflects), 1.0f, {0.0f, 0.0f, light_height}, 20000, 3);
 }
 
 TEST(GlassPhotons, APhotonThatRefractsTakesOneOverEtaSquared) {
@@ -696,23 +705,8 @@ TEST(GlassPhotons, TheGlassSplitIsWeighedFromWhereThePhotonGoes) {
     // Glass's refraction half alone: nothing comes back down from the pane's underside to the floor but what
     // came through it.
     pane.closures = {refraction};
-    Scene scene;
-    const uint32_t white =
-        scene.add_material({"white", MaterialKind::diffuse, glm::vec3(1.0f), 1.45f, glm::vec3(0.0f)});
-    const uint32_t glass = scene.add_material(pane);
-    test::add_quad(scene, "floor", {-4, -4, 0}, {4, -4, 0}, {4, 4, 0}, {-4, 4, 0}, white);
-    test::add_quad(scene, "pane", {-2, -2, 1}, {2, -2, 1}, {2, 2, 1}, {-2, 2, 1}, glass);
-    Light light;  // low beside the pane: its light enters at grazing angles
-    light.name = "lamp";
-    light.position = {2.0f, 0.0f, 1.6f};
-    light.value = glm::vec3(10.0f);
-    scene.add_light(light);
-    RenderControl control;
-    Stats stats;
-    PhotonSettings settings;
-    settings.count = 40000;
-    settings.seed = 5;
-    const std::vector<Photon> photons = trace_photons(scene, settings, control, stats).photons;
+    // The lamp low beside the pane: its light enters at grazing angles.
+    const std::vector<Photon> photons = photons_over_floor(pane, 2.0f, {2.0f, 0.0f, 1.6f}, 40000, 5);
     const float cos_critical = std::sqrt(1.0f - 1.0f / (ior * ior));
     size_t through = 0, beyond_critical = 0;
     for (const Photon& p : photons) {
