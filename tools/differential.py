@@ -655,8 +655,9 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   f(towards its arrival, seen from where it goes) |cos| / pdf (`weight_seen_from_exit`, `native/src/photons.cpp`;
   the native test `GlassPhotons.TheGlassSplitIsWeighedFromWhereThePhotonGoes`). A rough glass cylinder (GGX 0.4,
   ior 1.2) above a floor under a 2.5 m area light (`tools/rough_glass_cylinder.py`): its lowest blocks 1.43 and
-  1.58 of Cycles → 0.95 and 0.98 (the reference 0.96–1.0), at a fixed radius 0.1 so that the blur does not hide it. Seed 39: block relMSE at 16 s
-  0.0052 → 0.00085, its slope 0.05 → below −0.3 (no flag); seed 176: 0.00050 → 0.00034, slope −0.08 → −0.27.
+  1.58 of Cycles → 0.95 and 0.98 (the reference 0.96–1.0), at a fixed radius 0.1 so that the blur does not hide
+  it. Seed 39: block relMSE at 16 s 0.0052 → 0.00085, its slope 0.05 → below −0.3 (no flag); seed 176: 0.00050 →
+  0.00034, slope −0.08 → −0.27.
 - **Disk and ellipse lights were seen as their rectangle** (a light's shape): the camera's and the BSDF-sampled
   rays tested the bounding rectangle (`intersect_light`), so a directly seen disk light was 4/π too bright in
   Photon Splat and the reference alike. Seed 156 (an ellipse light in view): 1.256 → 1.000, the reference

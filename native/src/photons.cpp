@@ -123,9 +123,7 @@ glm::vec3 weight_seen_from_exit(const Scene& scene, const SurfacePoint& s, const
         seen.smooth_normal = -s.smooth_normal;
         seen.entering = !s.entering;
     }
-    Bsdf exit = shade(scene, seen, step.direction);
-    exit.sampled_estimate = b.sampled_estimate;
-    const glm::vec3 f = bsdf_eval(exit, b.wo, LobeSet::all, b.sampled_estimate);
+    const glm::vec3 f = bsdf_eval(shade(scene, seen, step.direction), b.wo, LobeSet::all, b.sampled_estimate);
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
@@ -209,7 +207,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // of them (halfway factors: the view it leaves in may weigh in one that b's view leaves out) and weighed
         // as Cycles weighs it, from the direction it leaves in (weight_seen_from_exit). Its delta parts stay b's:
         // a sharp Fresnel split is the same seen from either side.
-        const bool view_weighted = !m.factors.empty();
+        const bool view_weighted = m.has_lobes && !m.factors.empty();  // (a sharp Glass has no lobes to draw)
         Bsdf drawn_from = b;
         if (view_weighted) {
             const Bsdf halfway = shade_halfway_factors(scene, s, -ray.direction);
