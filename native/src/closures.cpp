@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -381,12 +382,32 @@ MultiGlass multi_ggx_glass(const Lobe& lobe, Alphas a, const glm::vec3& wi, cons
     return out;
 }
 
-LobeValue eval_multi_ggx_glass(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo) {
+// The key of Cycles' own evaluation walk for one pair of directions: a light sample's value is a fixed function of
+// them, as random as the directions are.
+uint64_t direction_pair_key(const glm::vec3& wi, const glm::vec3& wo) {
+    uint64_t key = 0x6d756c7469676c61ull;
+    for (const float v : {wi.x, wi.y, wi.z, wo.x, wo.y, wo.z}) {
+        uint32_t bits = 0;
+        std::memcpy(&bits, &v, sizeof bits);
+        key = (key ^ bits) * 0x100000001b3ull;
+        key ^= key >> 29;
+    }
+    return key;
+}
+
+// Walks per light sample's value: Cycles runs one; two halve the variance of its later scatterings.
+constexpr int kLightValueWalks = 2;
+
+LobeValue eval_multi_ggx_glass(const Lobe& lobe, Alphas a, const glm::vec3& wi, const glm::vec3& wo,
+                               MultiScatterEstimate estimate) {
     const bool reflect = lobe.kind == ClosureKind::reflection;
     if (reflect ? !(wi.z > 0.0f) : !(wi.z < 0.0f)) return zero_value();
     const MultiGlass g = multi_ggx_glass(lobe, a, wi, wo);
     LobeValue out;
-    out.f = lobe.weight * (g.f_single + g.multiple * kInvPi);
+    out.f = estimate == MultiScatterEstimate::light_sample
+                ? lobe.weight * cycles3_multi_glass_light_value(lobe.eta, a.x, lobe.specular_color, wi, wo,
+                                                                kLightValueWalks, direction_pair_key(wi, wo))
+                : lobe.weight * (g.f_single + g.multiple * kInvPi);
     out.pdf = (1.0f - g.p_multiple) * g.pdf_single + g.p_multiple * std::fabs(wi.z) * kInvPi;
     return out;
 }
@@ -549,13 +570,14 @@ LobeValue eval_local(const Lobe& lobe, const glm::vec3& wi, const glm::vec3& wo,
         case ClosureKind::reflection: {
             Alphas a;
             if (lobe.distribution == Distribution::sharp || !lobe_alphas(lobe, a)) return zero_value();
-            if (lobe.distribution == Distribution::multi_ggx_glass) return eval_multi_ggx_glass(lobe, a, wi, wo);
+            if (lobe.distribution == Distribution::multi_ggx_glass)
+                return eval_multi_ggx_glass(lobe, a, wi, wo, estimate);
             return eval_reflection(lobe, a, wi, wo, estimate);
         }
         case ClosureKind::refraction: {
             Alphas a;
             if (lobe.distribution == Distribution::multi_ggx_glass)
-                return lobe_alphas(lobe, a) ? eval_multi_ggx_glass(lobe, a, wi, wo) : zero_value();
+                return lobe_alphas(lobe, a) ? eval_multi_ggx_glass(lobe, a, wi, wo, estimate) : zero_value();
             if (lobe.distribution == Distribution::sharp || lobe.distribution == Distribution::gtr1 ||
                 !lobe_alphas(lobe, a))
                 return zero_value();
@@ -877,6 +899,17 @@ float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi
     // GGX's visible-normal density of h, carried to wi by the mirror's Jacobian: G1(wo) D(h) / (4 wo.z).
     const float pdf = ggx_g1(o, a) * ggx_d(sum / std::sqrt(len2), a) / (4.0f * o.z);
     return std::isfinite(pdf) && pdf > 0.0f ? pdf : 0.0f;
+}
+
+float lobe_reported_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo) {
+    if (lobe.distribution != Distribution::multi_ggx_glass) return lobe_eval(lobe, n, wi, wo).pdf;
+    Frame frame;
+    Alphas a;
+    if (!usable_directions(n, wo) || !finite3(wi) || !lobe_frame(lobe, n, frame) || !lobe_alphas(lobe, a)) return 0.0f;
+    const glm::vec3 i = frame.to_local(wi), o = frame.to_local(wo);
+    const bool reflect = lobe.kind == ClosureKind::reflection;
+    if (!(o.z > 0.0f) || (reflect ? !(i.z > 0.0f) : !(i.z < 0.0f))) return 0.0f;
+    return cycles3_multi_glass_pdf(lobe.eta, a.x, i, o);
 }
 
 LobeSample lobe_sample(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, float u1, float u2) {

@@ -176,9 +176,10 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     const bool mis = transmission || b.directional();
     const glm::vec3 origin = offset_ray_origin(x, side, rounding_scale);
     const RayTracer& tracer = scene.ray_tracer();
-    // A light's density in the MIS weights takes Cycles' probability of picking it where b holds a clearcoat.
-    const bool clearcoat = bsdf_has_clearcoat(b);
-    const auto mis_pick = [clearcoat](float cycles_pick) { return clearcoat ? cycles_pick : 1.0f; };
+    // Where b holds a clearcoat or Multiscatter GGX glass, a light's density in the MIS weights is the one Cycles
+    // gives it, its pick included (bsdf_weighs_by_cycles_pick, shading.h; LightSources::cycles_mis_density).
+    const bool cycles_weights = bsdf_weighs_by_cycles_pick(b);
+    const auto mis_pick = [cycles_weights](float cycles_pick) { return cycles_weights ? cycles_pick : 1.0f; };
     glm::vec3 sum(0.0f);
     bool any_area = false;
     const bool world_constant = sources.world().constant();
@@ -252,7 +253,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             if (is_black(f)) continue;
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
-            const float p_light = in.pdf * mis_pick(sources.cycles_pick_probability(l));
+            const float p_light = cycles_weights ? sources.cycles_mis_density(l, x, in.wi, in.pdf) : in.pdf;
             const float p_bsdf = (delta || !weighted) ? 0.0f : bsdf_pdf(b, in.wi, set);
             const float w = (delta || !weighted) ? 1.0f
                             : probes == n        ? power_heuristic(p_light, p_bsdf)
@@ -304,8 +305,8 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                 if (!light || sources.is_delta(l)) continue;
                 const LightHit h = intersect_light(*light, x, bs.direction);
                 if (!h.hit || !(h.distance >= travelled) || (found && !(h.distance < travelled + hit.t))) continue;
-                bsdf_sum += bs.weight * through * h.radiance *
-                            power_heuristic(bs.pdf, h.pdf * mis_pick(sources.cycles_pick_probability(l)));
+                const float p_light = cycles_weights ? sources.cycles_mis_density(l, x, bs.direction, h.pdf) : h.pdf;
+                bsdf_sum += bs.weight * through * h.radiance * power_heuristic(bs.mis_pdf, p_light);
             }
             if (!found) break;
             const Material& material =
@@ -318,7 +319,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
                     const glm::vec3 emitted = material.program_emission
                                                   ? emission_at(scene, surface_at(scene, ray, hit), -ray.direction)
                                                   : material.emission;
-                    bsdf_sum += bs.weight * through * emitted * power_heuristic(bs.pdf, p_light);
+                    bsdf_sum += bs.weight * through * emitted * power_heuristic(bs.mis_pdf, p_light);
                 }
             }
             if (!transparency || !material.transparent || crossing + 1 == kMaxCrossings) break;
@@ -334,7 +335,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             // A programmed world: whatever the BSDF sampled, weighted against the world's map (and portals).
             const float p_light = sources.world().pdf(x, side, bs.direction) *
                                   mis_pick(sources.cycles_lamp_pick_probability());
-            const float w = power_heuristic(float(m) * bs.pdf, float(world_samples) * p_light);
+            const float w = power_heuristic(float(m) * bs.mis_pdf, float(world_samples) * p_light);
             bsdf_sum += bs.weight * through * world_radiance(scene, bs.direction, ShaderRay::reflected) * w;
         } else {
             // The world: the lobes' part only (light sampling took Lambert's), f_lobes·cos / pdf.

@@ -139,6 +139,116 @@ int walk(const glm::vec3& wo, float eta, float alpha, Rng& rng, bool& above) {
     return 0;
 }
 
+// ---- Cycles' evaluation towards a light sample (its mf_eval for glass) -------------------------------------------
+
+// GGX's D as Cycles' walk code has it (D_ggx of bsdf_microfacet_multi.h): no test of the side, its density floored.
+float walk_d(const glm::vec3& m, float alpha) {
+    const float z2 = m.z * m.z, a2 = alpha * alpha, t = (1.0f - z2) + a2 * z2;
+    return a2 / std::max(kPi * t * t, 1e-7f);
+}
+
+// The light a scattering of a walk travelling along w (its Λ `lambda`) sends towards wo, reflected (wo_outside) or
+// refracted into the other side (mf_eval_phase_glass), η seen from w's side.
+float phase_towards(const glm::vec3& w, float lambda, const glm::vec3& wo, bool wo_outside, float alpha, float eta) {
+    if (w.z > 0.9999f) return 0.0f;
+    const float projected = w.z < -0.9999f ? 1.0f : lambda * w.z;
+    if (wo_outside) {
+        const glm::vec3 h = glm::normalize(wo - w);
+        if (h.z < 0.0f) return 0.0f;
+        const float c = glm::dot(-w, h);
+        return fresnel_dielectric_cos(c, eta) * std::max(0.0f, c) * walk_d(h, alpha) * 0.25f / (projected * c);
+    }
+    glm::vec3 h = glm::normalize(wo * eta - w);
+    if (h.z < 0.0f) h = -h;
+    const float c = glm::dot(-w, h), c_o = glm::dot(wo, h);
+    if (c < 0.0f) return 0.0f;
+    const float t = c + eta * c_o;
+    return (1.0f - fresnel_dielectric_cos(c, eta)) * std::max(0.0f, c) * std::max(0.0f, -c_o) * walk_d(h, alpha) /
+           (projected * t * t);
+}
+
+// One estimate of Cycles' mf_eval (white glass, the tint per scattering after the first) from the view `view`
+// towards the light `light`: eval = f |light.z|. Cycles' quirks kept (see the header).
+glm::vec3 cycles_glass_eval(float eta, float alpha, const glm::vec3& tint, glm::vec3 view, glm::vec3 light, Rng& rng) {
+    const bool light_outside = light.z >= 0.0f;
+    bool swapped = false;
+    if (view.z * light.z < 0.0f) {
+        if (-light.z < view.z) {  // the light the more grazing: turned round (η kept, as Cycles)
+            swapped = true;
+            const glm::vec3 t = -light;
+            light = -view;
+            view = t;
+        }
+    } else if (light.z < view.z) {
+        swapped = true;
+        std::swap(view, light);
+    }
+    if (view.z < 1e-5f || (light.z < 1e-5f && light_outside) || (light.z > -1e-5f && !light_outside))
+        return glm::vec3(0.0f);
+    WalkState s;
+    s.w = -view;
+    s.lambda = smith_lambda(s.w, alpha);
+    s.c1 = 1.0f;
+    s.escape = 0.0f;
+    const glm::vec3 towards = light_outside ? light : -light;
+    const float shadowing = smith_lambda(towards, alpha);
+    // The first scattering, analytic: height-correlated masking of uniform heights on each side.
+    float first = phase_towards(s.w, s.lambda, light, light_outside, alpha, eta);
+    const float lo = -s.lambda, li = shadowing + 1.0f;
+    first *= light_outside ? -s.lambda / (shadowing - s.lambda)
+                           : -s.lambda * std::exp(std::lgamma(lo) + std::lgamma(li) - std::lgamma(lo + li));
+    glm::vec3 eval(first), throughput(1.0f);
+    bool outside = true;
+    for (int order = 0; order < kWalkOrders; ++order) {
+        if (!next_height(s, rng.uniform())) break;
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        const glm::vec3 m = visible_normal(-s.w, alpha, u1, u2);
+        if (order > 0) {
+            const float phase = outside ? phase_towards(s.w, s.lambda, light, light_outside, alpha, eta)
+                                        : phase_towards(s.w, s.lambda, -light, !light_outside, alpha, 1.0f / eta);
+            const float c1 = outside == light_outside ? s.c1 : 1.0f - s.c1;
+            eval += throughput * (phase * escape_chance(towards, c1, shadowing));
+        }
+        if (order + 1 < kWalkOrders) {
+            bool reflected = false;
+            glm::vec3 next = scatter_on_facet(-s.w, outside ? eta : 1.0f / eta, m, rng.uniform(), reflected);
+            if (!reflected) {  // unlike its sampling walk, Cycles' evaluation turns the height over too
+                next = -next;
+                outside = !outside;
+                s.c1 = 1.0f - s.c1;
+            }
+            s.w = next;
+            s.lambda = smith_lambda(s.w, alpha);
+            throughput *= tint;
+            s.escape = escape_chance(s.w, s.c1, s.lambda);
+        }
+    }
+    if (swapped) eval *= std::fabs(view.z / light.z);
+    return eval;
+}
+
+// Cycles' fitted albedos of single-scattering GGX (mf_ggx_albedo) and of its transmission
+// (mf_ggx_transmission_albedo), which mf_glass_pdf mixes a cosine density in by.
+float cycles_ggx_albedo(float r) {
+    float albedo = 0.806495f * std::exp(-1.98712f * r * r) + 0.199531f;
+    albedo -= ((((((1.76741f * r - 8.43891f) * r + 15.784f) * r - 14.398f) * r + 6.45221f) * r - 1.19722f) * r +
+               0.027803f) * r + 0.00568739f;
+    return std::clamp(albedo, 0.0f, 1.0f);
+}
+
+float cycles_ggx_transmission_albedo(float a, float ior) {
+    if (ior < 1.0f) ior = 1.0f / ior;
+    a = std::clamp(a, 0.0f, 1.0f);
+    ior = std::clamp(ior, 1.0f, 3.0f);
+    const float i1 = 0.0476898f * std::exp(-0.978352f * (ior - 0.65657f) * (ior - 0.65657f)) - 0.033756f * ior +
+                     0.993261f;
+    const float r1 = (((0.116991f * a - 0.270369f) * a + 0.0501366f) * a - 0.00411511f) * a + 1.00008f;
+    const float i2 = (((-2.08704f * ior + 26.3298f) * ior - 127.906f) * ior + 292.958f) * ior - 287.946f +
+                     199.803f / (ior * ior) - 101.668f / (ior * ior * ior);
+    const float r2 = ((((5.3725f * a - 24.9307f) * a + 22.7437f) * a - 3.40751f) * a + 0.0986325f) * a + 0.00493504f;
+    return std::clamp(1.0f + i2 * r2 * 0.0019127f - (1.0f - i1) * (1.0f - r1) * 9.3205f, 0.0f, 1.0f);
+}
+
 // ---- The first scattering, evaluated ------------------------------------------------------------------------------
 
 // Isotropic GGX's D(h).
@@ -293,6 +403,48 @@ float multi_ggx_glass_single(float eta, float alpha, const glm::vec3& wi, const 
     // the shallower direction with the same η, where it meets a light sample behind the glass (docs/closures.md).
     return (1.0f - fresnel_dielectric_cos(cos_oh, eta)) * eta * eta * cos_oh * -cos_ih * d * masking /
            (wo.z * -wi.z * denominator * denominator);
+}
+
+glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                          const glm::vec3& wo, int walks, uint64_t key) {
+    // Cycles' closure evaluates nothing below α² 1e-7 (its sharp glass), and clamps α to [1e-4, 1].
+    if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta) || !(walks > 0) || !(wo.z > 0.0f) ||
+        !(wi.z != 0.0f))
+        return glm::vec3(0.0f);
+    const float a = std::min(alpha, 1.0f);
+    Rng rng(key, RngDomain::glass_light_value, 0);
+    glm::vec3 sum(0.0f);
+    for (int k = 0; k < walks; ++k) sum += cycles_glass_eval(eta, a, glm::clamp(tint, 0.0f, 1.0f), wo, wi, rng);
+    const glm::vec3 f = sum / (float(walks) * std::fabs(wi.z));
+    return std::isfinite(f.x + f.y + f.z) ? glm::max(f, glm::vec3(0.0f)) : glm::vec3(0.0f);
+}
+
+float cycles3_multi_glass_pdf(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo) {
+    // mf_glass_pdf(I = wo, omega_in = wi): Cycles' first argument is the view.
+    if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta)) return 0.0f;
+    const float a = std::min(alpha, 1.0f);
+    const bool reflective = wo.z * wi.z > 0.0f;
+    const glm::vec3 sum = wo + (reflective ? wi : wi * eta);
+    const float len = glm::length(sum);
+    if (!(len > 0.0f)) return 0.0f;
+    glm::vec3 h = sum / len;
+    if (h.z < 0.0f) h = -h;
+    const glm::vec3 v = wo.z < 0.0f ? -wo : wo;
+    const float lambda = smith_lambda(v, a), d = walk_d(h, a);
+    const float fresnel = fresnel_dielectric_cos(glm::dot(v, h), eta);
+    const float cosine = std::fabs(wi.z) / kPi;
+    float pdf;
+    if (reflective) {
+        const float single = 0.25f * d / std::max((1.0f + lambda) * v.z, 1e-7f);
+        const float albedo = cycles_ggx_albedo(a);
+        pdf = fresnel * (albedo * single + (1.0f - albedo) * cosine);
+    } else {
+        const float single = std::fabs(glm::dot(v, h) * glm::dot(wi, h) * d * eta * eta /
+                                       std::max((1.0f + lambda) * v.z * len * len, 1e-7f));
+        const float albedo = cycles_ggx_transmission_albedo(a, eta);
+        pdf = (1.0f - fresnel) * (albedo * single + (1.0f - albedo) * cosine);
+    }
+    return std::isfinite(pdf) && pdf > 0.0f ? pdf : 0.0f;
 }
 
 GlassWalkEnergy glass_walk_energy(float eta, float alpha, float cos_o, int walks, unsigned seed) {

@@ -127,6 +127,39 @@ glm::vec3 weight_seen_from_exit(const Scene& scene, const SurfacePoint& s, const
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
+// A photon's weight across Multiscatter GGX glass (or a material holding it) straight from its light. A camera path
+// that reaches this glass finds that light two ways, and Cycles 3.4 weighs them by the power heuristic with the
+// density the glass reports (mf_glass_pdf): by sampling the light, valued by its own evaluation walk, which is not
+// what its sampling walk returns (cycles3_multi_glass_light_value), and by the sampling walk meeting the light. So
+// the weight is (w_light f_light_sample + w_walk f_walk)(wi = b.wo, seen from step.direction) |cos| / pdf, both
+// seen from where the photon goes, as the camera path sees them (in Cycles' convention already, as in
+// weight_seen_from_exit). Seed 30 of the differential scenes: its Multiscatter glass ball's caustic.
+glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s, const Bsdf& b, const BsdfSample& step,
+                                       const PhotonSource& source) {
+    if (!(step.pdf > 0.0f)) return glm::vec3(0.0f);
+    SurfacePoint seen = s;
+    if (step.transmitted) {  // seen from the other side
+        seen.geometric_normal = -s.geometric_normal;
+        seen.shading_normal = -s.shading_normal;
+        seen.smooth_normal = -s.smooth_normal;
+        seen.entering = !s.entering;
+    }
+    const Bsdf from_exit = shade(scene, seen, step.direction);
+    const glm::vec3 f_walk = bsdf_eval(from_exit, b.wo, LobeSet::all, MultiScatterEstimate::walk);
+    const glm::vec3 f_light = bsdf_eval(from_exit, b.wo, LobeSet::all, MultiScatterEstimate::light_sample);
+    const float w_walk = source.sources->mirror_weight(
+        source.index, s.position, offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
+        s.geometric_normal, b.wo, bsdf_sample_pdf(from_exit, b.wo));
+    const glm::vec3 f = (1.0f - w_walk) * f_light + w_walk * f_walk;
+    return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
+}
+
+bool holds_multi_ggx_glass(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (b.lobes[k].distribution == Distribution::multi_ggx_glass) return true;
+    return false;
+}
+
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
@@ -179,8 +212,9 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         }
         Bsdf b = shade(scene, s, -ray.direction);
         // Light that leaves its lamp's first surface is what Cycles finds there by sampling the lamp: a Multiscatter
-        // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h).
-        if (direct) b.sampled_estimate = scene.multiscatter_light_estimate();
+        // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h). Multiscatter
+        // GGX glass takes Cycles' blend of that and its walk below (weight_blended_towards_light).
+        if (direct && !holds_multi_ggx_glass(b)) b.sampled_estimate = scene.multiscatter_light_estimate();
         // Stored where view samples receive it: on a surface that reflects it, and, where it is a caustic one, on a
         // translucent surface, whose far side gathers those (view_samples.h).
         const bool reflected = bsdf_has(b, LobeSet::reflection);
@@ -238,8 +272,14 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             step_weight *= source.sources->mirror_weight(
                 source.index, s.position, offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale),
                 s.geometric_normal, -ray.direction, mirror_reported_pdf(b));
-        const bool seen_from_exit = view_weighted && step.kind == ScatterKind::lobes;
-        if (seen_from_exit) step_weight = weight_seen_from_exit(scene, s, b, step);
+        const bool blended = direct && step.kind == ScatterKind::lobes && source.sources != nullptr &&
+                             scene.multiscatter_light_estimate() == MultiScatterEstimate::light_sample &&
+                             holds_multi_ggx_glass(b);
+        const bool seen_from_exit = blended || (view_weighted && step.kind == ScatterKind::lobes);
+        if (blended)
+            step_weight = weight_blended_towards_light(scene, s, b, step, source);
+        else if (seen_from_exit)
+            step_weight = weight_seen_from_exit(scene, s, b, step);
         if (step.kind != ScatterKind::transparent) {
             direct = false;
             after_glossy = step.glossy;

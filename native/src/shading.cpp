@@ -78,12 +78,28 @@ LobeChoice lobe_choice(const Bsdf& b, LobeSet set) {
     return c;
 }
 
-float choice_pdf(const Bsdf& b, const LobeChoice& c, const glm::vec3& wi) {
+// The density of wi under the choice: the one its samplers draw with, or (`reported`) the one Cycles reports for
+// its closures where it weighs light samples against them (lobe_reported_pdf: Multiscatter GGX glass's closure
+// picked by its own weight and reporting mf_glass_pdf).
+float choice_pdf(const Bsdf& b, const LobeChoice& c, const glm::vec3& wi, bool reported = false) {
     if (!(c.total > 0.0f)) return 0.0f;
     float pdf = c.lambert > 0.0f ? c.lambert * std::max(0.0f, glm::dot(wi, b.n)) * kInvPi : 0.0f;
-    for (int k = 0; k < b.lobe_count; ++k)
-        if (c.lobe[k] > 0.0f) pdf += c.lobe[k] * lobe_eval(b.lobes[k], b.n, wi, b.wo).pdf;
+    for (int k = 0; k < b.lobe_count; ++k) {
+        if (!(c.lobe[k] > 0.0f)) continue;
+        const Lobe& l = b.lobes[k];
+        if (reported && l.distribution == Distribution::multi_ggx_glass)
+            pdf += std::fabs((l.weight.x + l.weight.y + l.weight.z) * (1.0f / 3.0f)) *
+                   lobe_reported_pdf(l, b.n, wi, b.wo);
+        else
+            pdf += c.lobe[k] * lobe_eval(l, b.n, wi, b.wo).pdf;
+    }
     return pdf / c.total;
+}
+
+bool has_reported_density(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (b.lobes[k].distribution == Distribution::multi_ggx_glass) return true;
+    return false;
 }
 
 BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1, float u2) {
@@ -124,6 +140,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
     out.direction = wi;
     out.weight = weight;
     out.pdf = pdf;
+    out.mis_pdf = has_reported_density(b) ? choice_pdf(b, c, wi, true) : pdf;
     out.transmitted = glm::dot(wi, b.ng) < 0.0f;
     out.glossy = glossy;
     return out;
@@ -296,7 +313,7 @@ glm::vec3 eval_on_side(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiSca
     if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
     glm::vec3 f(0.0f);
     for (int k = 0; k < b.lobe_count; ++k)
-        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo).f;
+        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo, estimate).f;
     return f;
 }
 
@@ -456,7 +473,7 @@ BsdfSample sample_narrow_lobe_branch(const Bsdf& b, float u0, float u1, float u2
     out.glossy = true;
     out.direction = s.direction;
     out.weight = glm::max(weight, glm::vec3(0.0f));
-    out.pdf = s.pdf * weights[chosen] / total;
+    out.pdf = out.mis_pdf = s.pdf * weights[chosen] / total;
     return out;
 }
 
@@ -470,7 +487,7 @@ ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi) {
     return label;
 }
 
-float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set) { return choice_pdf(b, lobe_choice(b, set), wi); }
+float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set) { return choice_pdf(b, lobe_choice(b, set), wi, true); }
 
 bool bsdf_has(const Bsdf& b, LobeSet set) {
     if (set != LobeSet::transmission && !is_zero(b.lambert)) return true;
@@ -494,6 +511,8 @@ float defensive_floor(const Bsdf& b) {
     }
     return 0.125f * sum;
 }
+
+bool bsdf_weighs_by_cycles_pick(const Bsdf& b) { return bsdf_has_clearcoat(b) || has_reported_density(b); }
 
 void choose_defensively(Bsdf& b) { b.selection_floor = bsdf_has_clearcoat(b) ? defensive_floor(b) : 0.0f; }
 
@@ -526,7 +545,7 @@ float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi) {
     const LobeChoice lobes = lobe_choice(b, LobeSet::all);
     const float total = lobes.total + delta_sampling_weight(b, b.selection_floor);
     if (!(lobes.total > 0.0f) || !(total > 0.0f)) return 0.0f;
-    return choice_pdf(b, lobes, wi) * (lobes.total / total);
+    return choice_pdf(b, lobes, wi, true) * (lobes.total / total);
 }
 
 float photon_units_across(const Bsdf& b, const BsdfSample& s) {
@@ -557,6 +576,7 @@ BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2) {
         BsdfSample s = sample_choice(b, lobes, std::min(pick / lobes.total, 0x1.fffffep-1f), u1, u2);
         s.weight *= total / lobes.total;
         s.pdf *= lobes.total / total;
+        s.mis_pdf *= lobes.total / total;
         return s;
     }
     pick -= lobes.total;

@@ -96,3 +96,98 @@ TEST(GlassMultiscatter, IsAReflectionOrRefractionDistribution) {
     EXPECT_NO_THROW(ps::validate(c, 0, "closure"));
     EXPECT_EQ(ps::distribution_from_string("multi_ggx_glass"), Distribution::multi_ggx_glass);
 }
+
+namespace {
+
+glm::vec3 toward(float cos_theta, float phi) {
+    const float s = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    return {s * std::cos(phi), s * std::sin(phi), cos_theta};
+}
+
+// The mean of Cycles' light-sample value over `keys` of its evaluation walk (white glass, tint `tint`).
+float mean_light_value(float eta, float alpha, float tint, const glm::vec3& wi, const glm::vec3& wo, int keys) {
+    double sum = 0.0;
+    for (int k = 0; k < keys; ++k)
+        sum += ps::cycles3_multi_glass_light_value(eta, alpha, glm::vec3(tint), wi, wo, 1, uint64_t(k) * 7919u + 1u).x;
+    return float(sum / keys);
+}
+
+}  // namespace
+
+TEST(GlassMultiscatter, CyclesLightValueIsItsFirstScatteringWithoutEtaSquaredWhereTheTintStopsTheRest) {
+    // With a black tint Cycles' evaluation keeps its analytic first scattering only: the walk's own first
+    // scattering (multi_ggx_glass_single) reflected, and transmitted without its η² where the light is the
+    // steeper direction. Where the light is the more grazing, Cycles turns the path round with the same η, and its
+    // value is not that (the reason its light samples and its walk disagree on such glass).
+    const float alpha = 0.35f * 0.35f;
+    const glm::vec3 black(0.0f);
+    for (const float eta : {1.5f, 1.0f / 1.5f}) {
+        const glm::vec3 wo = toward(0.7f, 0.0f);
+        const glm::vec3 reflected = toward(0.5f, 2.8f);
+        const float single_r = ps::multi_ggx_glass_single(eta, alpha, reflected, wo, nullptr);
+        EXPECT_NEAR(ps::cycles3_multi_glass_light_value(eta, alpha, black, reflected, wo, 1, 5).x, single_r,
+                    1e-4f * single_r + 1e-7f) << eta;
+        // Transmitted, the light steeper than the view: not turned round.
+        const glm::vec3 steep = -toward(0.9f, 0.1f);
+        const float single_t = ps::multi_ggx_glass_single(eta, alpha, steep, wo, nullptr);
+        ASSERT_GT(single_t, 0.0f) << eta;
+        EXPECT_NEAR(ps::cycles3_multi_glass_light_value(eta, alpha, black, steep, wo, 1, 5).x * eta * eta, single_t,
+                    1e-3f * single_t) << eta;
+    }
+    // Into glass of η 1.5, the light the more grazing (inside, cos 0.8) than the view (cos 0.95): turned round with
+    // η kept, Cycles' value is far from the walk's.
+    const glm::vec3 wo = toward(0.95f, 0.0f), grazing = -toward(0.8f, 0.1f);
+    const float walk = ps::multi_ggx_glass_single(1.5f, alpha, grazing, wo, nullptr) / (1.5f * 1.5f);
+    const float cycles = ps::cycles3_multi_glass_light_value(1.5f, alpha, black, grazing, wo, 1, 5).x;
+    EXPECT_GT(std::fabs(cycles - walk), 0.2f * walk) << cycles << " " << walk;
+}
+
+TEST(GlassMultiscatter, CyclesLightValueAddsItsWalksLaterScatteringsReciprocally) {
+    // Reflected, Cycles' evaluation is reciprocal (it evaluates from the steeper direction either way), its later
+    // scatterings add light, tinted once each.
+    const float eta = 1.5f, alpha = 0.8f * 0.8f;
+    const glm::vec3 a = toward(0.8f, 0.0f), b = toward(0.3f, 2.0f);
+    const int keys = 20000;
+    const float ab = mean_light_value(eta, alpha, 1.0f, b, a, keys);
+    const float ba = mean_light_value(eta, alpha, 1.0f, a, b, keys);
+    EXPECT_NEAR(ab, ba, 0.03f * ab);
+    const float first = mean_light_value(eta, alpha, 0.0f, b, a, 16);
+    const float half = mean_light_value(eta, alpha, 0.5f, b, a, keys);
+    EXPECT_GT(ab, first * 1.02f);
+    EXPECT_GT(half, first);
+    EXPECT_LT(half, ab);
+}
+
+TEST(GlassMultiscatter, ReportedDensityIsMfGlassPdfOnEachLobesSide) {
+    // lobe_reported_pdf of the two lobes of a Multiscatter Glass: Cycles' mf_glass_pdf on each one's side, nothing
+    // on the other; over the sphere it is about a density (Cycles' fit of a cosine lobe beside the single
+    // scattering's).
+    const float eta = 1.45f, roughness = 0.5f;
+    ps::Lobe r;
+    r.kind = ClosureKind::reflection;
+    r.distribution = Distribution::multi_ggx_glass;
+    r.weight = r.specular_color = glm::vec3(1.0f);
+    r.alpha_x = r.alpha_y = roughness * roughness;
+    r.eta = eta;
+    ps::Lobe t = r;
+    t.kind = ClosureKind::refraction;
+    const glm::vec3 n(0.0f, 0.0f, 1.0f), wo = toward(0.6f, 0.0f);
+    const glm::vec3 up = toward(0.4f, 2.5f), down = -toward(0.7f, 0.5f);
+    EXPECT_FLOAT_EQ(ps::lobe_reported_pdf(r, n, up, wo), ps::cycles3_multi_glass_pdf(eta, r.alpha_x, up, wo));
+    EXPECT_EQ(ps::lobe_reported_pdf(r, n, down, wo), 0.0f);
+    EXPECT_FLOAT_EQ(ps::lobe_reported_pdf(t, n, down, wo), ps::cycles3_multi_glass_pdf(eta, r.alpha_x, down, wo));
+    EXPECT_EQ(ps::lobe_reported_pdf(t, n, up, wo), 0.0f);
+    // Uniform directions over the sphere, stratified.
+    const int strata = 400;
+    double sum = 0.0;
+    for (int i = 0; i < strata; ++i) {
+        for (int j = 0; j < strata; ++j) {
+            const float z = 1.0f - 2.0f * (i + 0.5f) / strata, phi = 6.2831853f * (j + 0.5f) / strata;
+            const glm::vec3 wi = toward(std::fabs(z), phi) * glm::vec3(1.0f, 1.0f, z < 0.0f ? -1.0f : 1.0f);
+            sum += ps::lobe_reported_pdf(r, n, wi, wo) + ps::lobe_reported_pdf(t, n, wi, wo);
+        }
+    }
+    const double integral = sum * 4.0 * 3.14159265 / (double(strata) * strata);
+    EXPECT_GT(integral, 0.8);
+    EXPECT_LT(integral, 1.1);
+}

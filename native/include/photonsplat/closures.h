@@ -157,6 +157,11 @@ LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, c
 // The density with which lobe_sample really draws wi: lobe_eval's pdf, except for the clearcoat, whose sampler (GGX
 // visible normals of its α) is not the density it reports (GTR1's), as in Cycles.
 float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
+// The density Cycles reports for wi where it weighs a light sample against its own BSDF directions (MIS): lobe_eval's
+// pdf, except for Multiscatter GGX glass, whose closure reports mf_glass_pdf over both its sides
+// (cycles3_multi_glass_pdf, glass_multiscatter.h) where the lobe draws from its own model. Per unit of the lobe's
+// weight's sampling weight (sampling_weight_of(lobe.weight)) for such glass, as Cycles picks its one closure.
+float lobe_reported_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
 
 struct LobeSample {
     glm::vec3 direction{0.0f};  // wi, unit

@@ -9,6 +9,8 @@
 // comes from running the walk itself, once per η: a table per roughness and cos θ_o of what it returns on each
 // side after one, two, and three or more scatterings (glass_multiscatter.cpp). docs/closures.md has the
 // measurements.
+#include <cstdint>
+
 #include <glm/vec3.hpp>
 
 namespace ps {
@@ -32,6 +34,19 @@ GlassMultiscatterAlbedo glass_multiscatter_albedo(float eta, float alpha, float 
 // height-correlated masking of uniform heights; transmitted, with η² (what the walk returns). Its density under
 // visible-normal sampling from wo goes to *pdf (may be null).
 float multi_ggx_glass_single(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo, float* pdf);
+
+// Cycles 3.4's own value of its Multiscatter GGX Glass towards a light sample (its mf_eval for glass), which is not
+// what its walk returns: where Cycles meets a light from such glass it weighs this against the walk by the power
+// heuristic, with mf_glass_pdf as the walk's density (cycles3_multi_glass_pdf), so its image holds both. f (no
+// cosine) towards wi, seen from wo (local frame, wo.z > 0; wi.z < 0 transmitted), per unit of the closure's weight,
+// the tint once per scattering after the first. Its first scattering is analytic; the later ones come from `walks`
+// walks of its own, keyed by `key` (the same key, the same value). As Cycles': the η² of a transmission is left out,
+// and a transmission whose wi is the more grazing is evaluated turned round with the same η.
+glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                          const glm::vec3& wo, int walks, uint64_t key);
+// The density Cycles 3.4 reports for that glass's direction wi seen from wo (mf_glass_pdf): both sides together
+// (Fresnel of the half vector between them), used only to weigh light samples against its directions.
+float cycles3_multi_glass_pdf(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo);
 
 // The walk's energies for white glass (tint 1) at one (eta, alpha, cos_o), by side and by the number of
 // scatterings, estimated with `walks` walks (the table's own numbers: tests compare them with Cycles').

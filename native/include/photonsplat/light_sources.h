@@ -62,6 +62,13 @@ public:
         return sources_[i].kind == Kind::emissive_surfaces ? emissive_pick_ : lamp_pick_;
     }
     float cycles_lamp_pick_probability() const { return lamp_pick_; }  // a scene light or a programmed world
+    // The density of wi from x that Cycles 3.4 weighs source i by against a BSDF's directions, its pick included,
+    // where `own` is our sampler's (no pick): a lamp's by cycles_lamp_pdf (a rectangle's by its solid angle, as
+    // Cycles samples it), any other source's `own` times Cycles' pick. For the MIS weights that must be Cycles' own
+    // (bsdf_weighs_by_cycles_pick, shading.h).
+    float cycles_mis_density(size_t i, const glm::vec3& x, const glm::vec3& wi, float own) const {
+        return sources_[i].kind == Kind::light ? cycles_lamp_pdf(i, x, wi) : own * cycles_pick_probability(i);
+    }
     float cycles_emissive_pick_probability() const { return emissive_pick_; }
 
     // A sun or a programmed world: its photons start on a disc covering the scene (or on a portal), placed by

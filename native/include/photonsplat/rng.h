@@ -19,6 +19,7 @@ enum class RngDomain : uint64_t {
     reference_path = 16,    // reference renderer: one camera path, keyed by pass × pixels + pixel
     reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
     glass_walk = 18,        // the microsurface walks that tabulate Multiscatter GGX glass (glass_multiscatter.cpp)
+    glass_light_value = 19, // Cycles' walk that evaluates that glass towards a light sample (glass_multiscatter.cpp)
 };
 
 // PCG32 (O'Neill 2014), with state and stream derived from the key by SplitMix64.

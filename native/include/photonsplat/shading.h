@@ -79,7 +79,8 @@ glm::vec3 bsdf_eval(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::a
 // shading normal alone.
 glm::vec3 bsdf_eval_shading_side(const Bsdf& b, const glm::vec3& wi, LobeSet set,
                                  MultiScatterEstimate estimate = MultiScatterEstimate::walk);
-// The density with which bsdf_sample_set(b, set) draws wi (solid angle).
+// The density of wi under bsdf_sample_set(b, set) that a light sample is weighed against (solid angle): the one
+// it draws with, except for Multiscatter GGX glass (BsdfSample::mis_pdf).
 float bsdf_pdf(const Bsdf& b, const glm::vec3& wi, LobeSet set = LobeSet::all);
 // Only the reflection side of bsdf_eval, from a view sample's stored parts: what it receives from photons (splat.h).
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
@@ -110,12 +111,16 @@ ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi);
 float defensive_floor(const Bsdf& b);
 // Whether b holds a clearcoat (a GTR1 lobe). Cycles samples its clearcoat by GGX's visible normals but reports
 // GTR1's density for them, so what it converges to there depends on how it samples, and we follow it there:
-//   - the MIS weights take the light's density times the probability that Cycles picks that light
-//     (LightSources::cycles_pick_probability; differential seed 153: a 0.001 W lamp added far away took 2.9 % off
-//     a clearcoat's highlight in Cycles). Elsewhere the light's own density is the better one, every light being
-//     sampled at each point;
+//   - the MIS weights take the light's density as Cycles gives it, the probability that Cycles picks that light
+//     included (LightSources::cycles_mis_density; differential seed 153: a 0.001 W lamp added far away took 2.9 %
+//     off a clearcoat's highlight in Cycles). Elsewhere the light's own density is the better one, every light
+//     being sampled at each point;
 //   - choose_defensively at the camera's first hit.
 bool bsdf_has_clearcoat(const Bsdf& b);
+// Whether what Cycles converges to at b depends on its MIS weights, so that they take the light's density times
+// Cycles' pick of that light: a clearcoat (above), or a Multiscatter GGX glass, whose light samples Cycles values by
+// an evaluation its walk does not agree with (cycles3_multi_glass_light_value, glass_multiscatter.h).
+bool bsdf_weighs_by_cycles_pick(const Bsdf& b);
 // Where Cycles picks the clearcoat, it draws wi from GGX's visible normals and weighs it by f / Σ w_j p_j with the
 // clearcoat's p_j GTR1's: a sharp clearcoat (α ≤ 0.01: the default Clearcoat Roughness 0.03 is α 0.0009) so
 // reflects its surroundings as a mirror does, with the whole of its Fresnel weight, where GTR1 itself would put
@@ -159,7 +164,9 @@ struct BsdfSample {
     ScatterKind kind = ScatterKind::none;  // none: absorbed (the path ends)
     glm::vec3 direction{0.0f};
     glm::vec3 weight{0.0f};  // f |cos| / pdf for lobes; delta weight / choice probability for the rest
-    float pdf = 0.0f;        // lobes only: bsdf_pdf of direction for the set sampled (for MIS); 0 for delta parts
+    float pdf = 0.0f;        // lobes only: the density direction was drawn with (weight's); 0 for delta parts
+    float mis_pdf = 0.0f;    // the density Cycles reports for it, which a light it meets is weighed against (MIS):
+                             // pdf, except where Multiscatter GGX glass reports its own (lobe_reported_pdf)
     bool transmitted = false;  // the direction leaves on the other side (offset the next ray there)
     // A microfacet lobe, the mirror or the refraction was chosen: what Cycles labels glossy or transmission (its
     // Caustics toggles), as against diffuse, translucent, sheen, velvet and transparency.
@@ -167,7 +174,8 @@ struct BsdfSample {
 };
 // Samples the whole closure sum: a part chosen in proportion to its sampling weight (the delta parts' luminance,
 // the lobes' lobe_sampling_weight), then a direction. u0 chooses, u1 and u2 place. Non-delta samples carry
-// bsdf_sample_pdf of their direction (the lobes' density times the probability of choosing the lobes).
+// the density of their direction (the lobes' density times the probability of choosing the lobes), and the one
+// Cycles reports for it (mis_pdf), which bsdf_sample_pdf gives for any direction.
 BsdfSample bsdf_sample(const Bsdf& b, float u0, float u1, float u2);
 float bsdf_sample_pdf(const Bsdf& b, const glm::vec3& wi);
 // The same over one set of non-delta parts only.

@@ -3,8 +3,9 @@
 //
 // At a non-specular vertex x (diffuse, or glossy rough enough to be a lobe):
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
-//     w = p_light² / (p_light² + p_bsdf²) (where x holds a clearcoat, p_light times Cycles' probability of
-//     picking that light: bsdf_has_clearcoat); delta lights (p_light = 0 by convention) get w = 1;
+//     w = p_light² / (p_light² + p_bsdf²) (where x holds a clearcoat or Multiscatter GGX glass, p_light times
+//     Cycles' probability of picking that light: bsdf_weighs_by_cycles_pick; p_bsdf the density Cycles reports,
+//     BsdfSample::mis_pdf); delta lights (p_light = 0 by convention) get w = 1;
 //   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns, never
 //     counted here), through the reflection parts from x's side and through the transmission parts from the
 //     other;
@@ -84,7 +85,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
                         PathCounters& counters) {
     glm::vec3 sum(0.0f);
     const bool transmits = bsdf_has(b, LobeSet::transmission);
-    const bool clearcoat = bsdf_has_clearcoat(b);  // weights take Cycles' light pick (shading.h)
+    const bool cycles_weights = bsdf_weighs_by_cycles_pick(b);  // weights take Cycles' light densities (shading.h)
     for (size_t l = 0; l < c.sources.size(); ++l) {
         if (c.sources.is_world(l) && c.sources.world().constant()) continue;  // BSDF sampling alone (below)
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
@@ -109,8 +110,8 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         const ShadowSegment segment = shadow_segment(s.position, offset_ray_origin(start, side, s.rounding_scale), in);
         const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
-        const float pick = clearcoat ? c.sources.cycles_pick_probability(l) : 1.0f;
-        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(in.pdf * pick, bsdf_sample_pdf(b, in.wi));
+        const float p_light = cycles_weights ? c.sources.cycles_mis_density(l, s.position, in.wi, in.pdf) : in.pdf;
+        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(p_light, bsdf_sample_pdf(b, in.wi));
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
     return sum;
@@ -121,9 +122,9 @@ struct LastScatter {
     bool nonspecular = false;      // a non-specular vertex lies behind on the path
     bool specular_since = false;   // and one or more specular vertices since it
     glm::vec3 x{0.0f};             // that vertex
-    float pdf = 0.0f;              // its BSDF sample's density
-    bool clearcoat = false;        // it held a clearcoat: lights' densities take Cycles' pick (bsdf_has_clearcoat)
-    float pick(float cycles_pick) const { return clearcoat ? cycles_pick : 1.0f; }
+    float pdf = 0.0f;              // its BSDF sample's density, as Cycles reports it (BsdfSample::mis_pdf)
+    bool cycles_weights = false;   // lights' densities are Cycles' there (bsdf_weighs_by_cycles_pick)
+    float pick(float cycles_pick) const { return cycles_weights ? cycles_pick : 1.0f; }
     // The last scatter was a mirror reporting this density (mirror_reported_pdf), from mirror_x: what the ray
     // meets takes mirror_emitter_weight. 0: another scatter, or a true mirror.
     float mirror_pdf = 0.0f;
@@ -164,7 +165,9 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
-                const float pdf = (drawn.hit ? drawn.pdf : h.pdf) * last.pick(c.sources.cycles_pick_probability(l));
+                const float own = drawn.hit ? drawn.pdf : h.pdf;
+                const float pdf =
+                    last.cycles_weights ? c.sources.cycles_mis_density(l, last.x, ray.direction, own) : own;
                 float w = light_weight(last, c.photon_caustics[l] != 0, pdf);
                 if (w > 0.0f && last.mirror_pdf > 0.0f)
                     w *= mirror_emitter_weight(last.mirror_pdf, c.sources.cycles_lamp_pdf(l, last.mirror_x, ray.direction));
@@ -231,7 +234,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
         ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), bs.direction};
         // Transparency lets the ray go on as it was: its MIS state stays that of the last real scatter.
         if (bs.kind == ScatterKind::lobes) {
-            last = LastScatter{true, false, s.position, bs.pdf, bsdf_has_clearcoat(b)};
+            last = LastScatter{true, false, s.position, bs.mis_pdf, bsdf_weighs_by_cycles_pick(b)};
         } else if (bs.kind != ScatterKind::transparent) {
             last.specular_since = true;
             last.mirror_pdf = bs.kind == ScatterKind::mirror ? mirror_reported_pdf(b) : 0.0f;
