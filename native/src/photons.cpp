@@ -106,6 +106,18 @@ struct PathOptions {
     bool caustic_shares = false;
 };
 
+// The surface as a path leaving it along step sees it: from the other side where step went through.
+SurfacePoint seen_by(const SurfacePoint& s, const BsdfSample& step) {
+    SurfacePoint seen = s;
+    if (step.transmitted) {
+        seen.geometric_normal = -s.geometric_normal;
+        seen.shading_normal = -s.shading_normal;
+        seen.smooth_normal = -s.smooth_normal;
+        seen.entering = !s.entering;
+    }
+    return seen;
+}
+
 // A photon's weight across a lobe scatter from s into step.direction, where s's material weighs its closures by
 // the view (Glass's Fresnel split, Fresnel and Layer Weight mixes: Material::factors). Cycles evaluates those
 // towards its camera path, which is where the photon goes, not where it came from: a light path through rough
@@ -116,14 +128,8 @@ struct PathOptions {
 // through its side came out 1.16 to 1.58 times as bright as in Cycles (tools/rough_glass_cylinder.py).
 glm::vec3 weight_seen_from_exit(const Scene& scene, const SurfacePoint& s, const Bsdf& b, const BsdfSample& step) {
     if (!(step.pdf > 0.0f)) return glm::vec3(0.0f);
-    SurfacePoint seen = s;
-    if (step.transmitted) {  // seen from the other side
-        seen.geometric_normal = -s.geometric_normal;
-        seen.shading_normal = -s.shading_normal;
-        seen.smooth_normal = -s.smooth_normal;
-        seen.entering = !s.entering;
-    }
-    const glm::vec3 f = bsdf_eval(shade(scene, seen, step.direction), b.wo, LobeSet::all, b.sampled_estimate);
+    const Bsdf from_exit = shade(scene, seen_by(s, step), step.direction);
+    const glm::vec3 f = bsdf_eval(from_exit, b.wo, LobeSet::all, b.sampled_estimate);
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
@@ -137,14 +143,7 @@ glm::vec3 weight_seen_from_exit(const Scene& scene, const SurfacePoint& s, const
 glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s, const Bsdf& b, const BsdfSample& step,
                                        const PhotonSource& source) {
     if (!(step.pdf > 0.0f)) return glm::vec3(0.0f);
-    SurfacePoint seen = s;
-    if (step.transmitted) {  // seen from the other side
-        seen.geometric_normal = -s.geometric_normal;
-        seen.shading_normal = -s.shading_normal;
-        seen.smooth_normal = -s.smooth_normal;
-        seen.entering = !s.entering;
-    }
-    const Bsdf from_exit = shade(scene, seen, step.direction);
+    const Bsdf from_exit = shade(scene, seen_by(s, step), step.direction);
     const glm::vec3 f_walk = bsdf_eval(from_exit, b.wo, LobeSet::all, MultiScatterEstimate::walk);
     const glm::vec3 f_light = bsdf_eval(from_exit, b.wo, LobeSet::all, MultiScatterEstimate::light_sample);
     const float w_walk = source.sources->mirror_weight(
