@@ -65,8 +65,9 @@ SAMPLE = {
     22: ("a rough Glass of Multiscatter GGX (a cylinder, roughness 0.45): Cycles 3.x's random walk on its "
          "microsurface, each microfacet reflecting by its own Fresnel, where the export once split single-scatter "
          "GGX by the shading normal's (the image 0.940 of Cycles at these iterations; 0.993 with the walk's, 0.976 "
-         "with Cycles' own value of its light samples blended in as Cycles blends it: the lower half of the "
-         "cylinder, seen through it, then shows the cosine shape given to the walk's later scatterings)",
+         "with Cycles' own value of its light samples blended in as Cycles blends it, where the lower half of the "
+         "cylinder, seen through it, came out darker for a cause not isolated: docs/results/differential.md, "
+         "stop 42)",
          0.03, (0.77, 1.3)),
     30: ("a Multiscatter GGX Glass ball (roughness 0.35) under three area lights: Cycles 3.x values its light samples "
          "by an evaluation walk of its own, which its sampling walk does not agree with, and weighs the two by the "
