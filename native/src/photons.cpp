@@ -153,12 +153,6 @@ glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
-bool holds_multi_ggx_glass(const Bsdf& b) {
-    for (int k = 0; k < b.lobe_count; ++k)
-        if (b.lobes[k].distribution == Distribution::multi_ggx_glass) return true;
-    return false;
-}
-
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
@@ -213,7 +207,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // Light that leaves its lamp's first surface is what Cycles finds there by sampling the lamp: a Multiscatter
         // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h). Multiscatter
         // GGX glass takes Cycles' blend of that and its walk below (weight_blended_towards_light).
-        if (direct && !holds_multi_ggx_glass(b)) b.sampled_estimate = scene.multiscatter_light_estimate();
+        if (direct && !bsdf_has_multi_ggx_glass(b)) b.sampled_estimate = scene.multiscatter_light_estimate();
         // Stored where view samples receive it: on a surface that reflects it, and, where it is a caustic one, on a
         // translucent surface, whose far side gathers those (view_samples.h).
         const bool reflected = bsdf_has(b, LobeSet::reflection);
@@ -273,7 +267,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
                 s.geometric_normal, -ray.direction, mirror_reported_pdf(b));
         const bool blended = direct && step.kind == ScatterKind::lobes && source.sources != nullptr &&
                              scene.multiscatter_light_estimate() == MultiScatterEstimate::light_sample &&
-                             holds_multi_ggx_glass(b);
+                             bsdf_has_multi_ggx_glass(b);
         const bool seen_from_exit = blended || (view_weighted && step.kind == ScatterKind::lobes);
         if (blended)
             step_weight = weight_blended_towards_light(scene, s, b, step, source);

@@ -96,12 +96,6 @@ float choice_pdf(const Bsdf& b, const LobeChoice& c, const glm::vec3& wi, bool r
     return pdf / c.total;
 }
 
-bool has_reported_density(const Bsdf& b) {
-    for (int k = 0; k < b.lobe_count; ++k)
-        if (b.lobes[k].distribution == Distribution::multi_ggx_glass) return true;
-    return false;
-}
-
 BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1, float u2) {
     BsdfSample out;
     if (!(c.total > 0.0f)) return out;
@@ -140,7 +134,7 @@ BsdfSample sample_choice(const Bsdf& b, const LobeChoice& c, float u0, float u1,
     out.direction = wi;
     out.weight = weight;
     out.pdf = pdf;
-    out.mis_pdf = has_reported_density(b) ? choice_pdf(b, c, wi, true) : pdf;
+    out.mis_pdf = bsdf_has_multi_ggx_glass(b) ? choice_pdf(b, c, wi, true) : pdf;
     out.transmitted = glm::dot(wi, b.ng) < 0.0f;
     out.glossy = glossy;
     return out;
@@ -512,7 +506,13 @@ float defensive_floor(const Bsdf& b) {
     return 0.125f * sum;
 }
 
-bool bsdf_weighs_by_cycles_pick(const Bsdf& b) { return bsdf_has_clearcoat(b) || has_reported_density(b); }
+bool bsdf_has_multi_ggx_glass(const Bsdf& b) {
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (b.lobes[k].distribution == Distribution::multi_ggx_glass) return true;
+    return false;
+}
+
+bool bsdf_weighs_by_cycles_pick(const Bsdf& b) { return bsdf_has_clearcoat(b) || bsdf_has_multi_ggx_glass(b); }
 
 void choose_defensively(Bsdf& b) { b.selection_floor = bsdf_has_clearcoat(b) ? defensive_floor(b) : 0.0f; }
 

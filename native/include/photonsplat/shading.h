@@ -117,6 +117,9 @@ float defensive_floor(const Bsdf& b);
 //     being sampled at each point;
 //   - choose_defensively at the camera's first hit.
 bool bsdf_has_clearcoat(const Bsdf& b);
+// Whether b holds a Multiscatter GGX glass lobe, whose light samples and MIS density are Cycles' own
+// (cycles3_multi_glass_light_value, lobe_reported_pdf).
+bool bsdf_has_multi_ggx_glass(const Bsdf& b);
 // Whether what Cycles converges to at b depends on its MIS weights, so that they take the light's density times
 // Cycles' pick of that light: a clearcoat (above), or a Multiscatter GGX glass, whose light samples Cycles values by
 // an evaluation its walk does not agree with (cycles3_multi_glass_light_value, glass_multiscatter.h).
