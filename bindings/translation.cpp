@@ -135,14 +135,15 @@ void bind_translation(py::module_& m) {
         .def_property(
             "multiscatter_light_estimate",
             [](const ps::Scene& s) {
-                return std::string(s.multiscatter_light_estimate() == ps::MultiScatterEstimate::walk ? "walk"
-                                                                                                   : "light_sample");
+                return std::string(s.multiscatter_light_estimate() == ps::MultiScatterEstimate::light_sample_as_walk
+                                       ? "walk"
+                                       : "light_sample");
             },
             [](ps::Scene& s, const std::string& name) {
                 if (name != "walk" && name != "light_sample")
                     throw ps::InvalidInput("Scene.multiscatter_light_estimate",
                                            "must be 'light_sample' or 'walk', got '" + name + "'");
-                s.set_multiscatter_light_estimate(name == "walk" ? ps::MultiScatterEstimate::walk
+                s.set_multiscatter_light_estimate(name == "walk" ? ps::MultiScatterEstimate::light_sample_as_walk
                                                                  : ps::MultiScatterEstimate::light_sample);
             },
             "How light samples evaluate a Multiscatter GGX lobe: 'light_sample' (the default) as Cycles 3.x, whose "

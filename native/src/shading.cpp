@@ -91,7 +91,7 @@ float choice_pdf(const Bsdf& b, const LobeChoice& c, const glm::vec3& wi, bool r
             pdf += std::fabs((l.weight.x + l.weight.y + l.weight.z) * (1.0f / 3.0f)) *
                    lobe_reported_pdf(l, b.n, wi, b.wo);
         else
-            pdf += c.lobe[k] * lobe_eval(l, b.n, wi, b.wo).pdf;
+            pdf += c.lobe[k] * (reported ? lobe_reported_pdf(l, b.n, wi, b.wo) : lobe_eval(l, b.n, wi, b.wo).pdf);
     }
     return pdf / c.total;
 }

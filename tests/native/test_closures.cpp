@@ -327,6 +327,42 @@ TEST(ClosureValues, RefractionSheenVelvet) {
     }
 }
 
+TEST(ClosureValues, LightSamplesValueRefractionWhereNoMicrofacetRefracts) {
+    // From inside glass (η = 1/1.36) at 36° to a light outside at 85°, onwards: the line through ht = −(wo + η wi)
+    // (5° off the normal) meets no microfacet that refracts wo into wi (h·wi > 0 for the upward-facing h), so the
+    // lobe never draws wi and its own value there is 0. Towards a light sample Cycles takes the formula as it stands:
+    // f = G1(wo) G1(wi) D(h) η² |h·wo| |h·wi| / (co |ci| |ht|²), reporting G1(wo) D(h) η² |h·wo| |h·wi| / (co |ht|²).
+    const float eta = 1.0f / 1.36f;
+    const double co = 0.81, ci = 0.09, a2 = 0.04;
+    const glm::vec3 wo = dir(float(co), 0.0f), wi = -dir(float(ci), 0.0f);
+    const glm::vec3 ht = -(wo + eta * wi), h = glm::normalize(ht);
+    ASSERT_GT(glm::dot(h.z > 0.0f ? h : -h, wi), 0.0f);  // indeed no refracting microfacet
+    const double ch2 = double(h.z) * h.z, tan2h = (1 - ch2) / ch2;
+    const double common = double(eta) * eta * std::fabs(glm::dot(h, wo) * glm::dot(h, wi)) / (co * glm::dot(ht, ht));
+    auto ggx_g1 = [&](double c) { return 2.0 / (1.0 + std::sqrt(1.0 + a2 * (1 - c * c) / (c * c))); };
+    auto beckmann_g1 = [&](double c) {  // Cycles' rational fit
+        const double inv_a = std::sqrt(a2 * (1 - c * c) / (c * c));
+        if (inv_a < 0.625) return 1.0;
+        const double k = 1.0 / inv_a;
+        return ((2.181 * k + 3.535) * k) / ((2.577 * k + 2.276) * k + 1.0);
+    };
+    for (const Distribution d : {Distribution::ggx, Distribution::beckmann}) {
+        const Lobe lobe = microfacet(ClosureKind::refraction, d, 0.2f, FresnelKind::none, eta);
+        EXPECT_EQ(lobe_eval(lobe, kN, wi, wo).f.x, 0.0f);
+        EXPECT_EQ(lobe_eval(lobe, kN, wi, wo).pdf, 0.0f);
+        const bool ggx = d == Distribution::ggx;
+        const double dh = ggx ? a2 / (kPiD * ch2 * ch2 * (a2 + tan2h) * (a2 + tan2h))
+                              : std::exp(-tan2h / a2) / (kPiD * a2 * ch2 * ch2);
+        const double g1o = ggx ? ggx_g1(co) : beckmann_g1(co), g1i = ggx ? ggx_g1(ci) : beckmann_g1(ci);
+        const LobeValue towards_light = lobe_eval(lobe, kN, wi, wo, MultiScatterEstimate::light_sample);
+        EXPECT_NEAR(towards_light.f.x / (g1o * g1i * dh * common / ci), 1.0, 1e-4) << to_string(d);
+        EXPECT_NEAR(towards_light.pdf / (g1o * dh * common), 1.0, 1e-4) << to_string(d);
+        // Cycles 4.x values it so too, and the density light samples are weighed against is the reported one.
+        EXPECT_EQ(lobe_eval(lobe, kN, wi, wo, MultiScatterEstimate::light_sample_as_walk).f.x, towards_light.f.x);
+        EXPECT_FLOAT_EQ(lobe_reported_pdf(lobe, kN, wi, wo), towards_light.pdf);
+    }
+}
+
 // --- Energy ------------------------------------------------------------------------------------------------------
 
 TEST(ClosureFurnace, NoLobeGainsEnergy) {

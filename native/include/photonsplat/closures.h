@@ -143,14 +143,16 @@ struct LobeValue {
     glm::vec3 f{0.0f};
     float pdf = 0.0f;
 };
-// Which of Cycles 3.4's two estimates of a Multiscatter GGX lobe an evaluation follows. A direction Cycles draws
-// from the lobe comes with the weight of its random walk on the microsurface (mf_sample): light that leaves after k
-// extra bounces keeps the colour (or the Fresnel colour) of each once. Towards a light sample Cycles evaluates the
-// lobe by another walk (mf_eval), which applies each extra bounce's colour twice. Every other lobe, and a white
-// multi_ggx, is the same in both.
+// Which of Cycles' estimates of a lobe an evaluation follows. A direction Cycles draws from a Multiscatter GGX lobe
+// comes with the weight of its random walk on the microsurface (mf_sample): light that leaves after k extra bounces
+// keeps the colour (or the Fresnel colour) of each once. Towards a light sample Cycles 3.x evaluates the lobe by
+// another walk (mf_eval), which applies each extra bounce's colour twice; 4.x values it there as drawn. And towards
+// a light sample every Cycles values a GGX or Beckmann refraction at any pair of directions, even one that no
+// microfacet refracts into the other, which it never draws (eval_refraction). Every other lobe is the same in all.
 enum class MultiScatterEstimate : uint8_t {
-    walk,          // the lobe's value where Cycles' path samples it: camera paths' indirect light, photons' bounces
-    light_sample,  // where Cycles samples a light (or the world's map) instead: direct light
+    walk,                  // where Cycles' path samples the lobe: camera paths' indirect light, photons' bounces
+    light_sample,          // where Cycles 3.x samples a light (or the world's map) instead: direct light
+    light_sample_as_walk,  // where Cycles 4.x samples a light: Multiscatter GGX valued as drawn
 };
 LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo,
                     MultiScatterEstimate estimate = MultiScatterEstimate::walk);
@@ -159,8 +161,9 @@ LobeValue lobe_eval(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, c
 float lobe_sampler_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
 // The density Cycles reports for wi where it weighs a light sample against its own BSDF directions (MIS): lobe_eval's
 // pdf, except for Multiscatter GGX glass, whose closure reports mf_glass_pdf over both its sides
-// (cycles3_multi_glass_pdf, glass_multiscatter.h) where the lobe draws from its own model. Per unit of the lobe's
-// weight's sampling weight (sampling_weight_of(lobe.weight)) for such glass, as Cycles picks its one closure.
+// (cycles3_multi_glass_pdf, glass_multiscatter.h) where the lobe draws from its own model, and for a GGX or Beckmann
+// refraction, which reports a density also where no microfacet joins wi and wo (eval_refraction). Per unit of the
+// lobe's weight's sampling weight (sampling_weight_of(lobe.weight)) for such glass, as Cycles picks its one closure.
 float lobe_reported_pdf(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wi, const glm::vec3& wo);
 
 struct LobeSample {

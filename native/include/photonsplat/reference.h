@@ -46,7 +46,8 @@ struct ReferenceSettings {
     int samples = 64;                  // camera paths per pixel; one per pass
     uint64_t seed = 0;
     int threads = 0;                   // 0 = all cores
-    int max_bounces = 16;              // scattering events on a camera path; specular bounces of a photon
+    int max_bounces = 16;              // as Cycles' Max Bounces: camera-path vertices 0..N scatter (0: direct
+                                       // light); specular bounces of a photon
     uint64_t caustic_photons = 100000; // photon paths emitted per pass (0 = no photon mapping: pure path tracing,
                                        // which then misses L S+ D paths of point lights and suns)
     float caustic_radius = 0.0f;       // photon radius of the first pass, world units; 0 = automatic

@@ -251,9 +251,12 @@ public:
     // then takes them. The same BVHs either way. Off (the default): no thread, every BVH built by ray_tracer().
     void set_build_bvhs_ahead(bool on) { build_bvhs_ahead_ = on; }
     bool build_bvhs_ahead() const { return build_bvhs_ahead_; }
-    // The estimate of Multiscatter GGX lobes that light samples take (closures.h): light_sample (the default) as
-    // Cycles 3.x evaluates its random walk towards a light, walk for Cycles 4.x, whose lobe is the same both ways.
-    void set_multiscatter_light_estimate(MultiScatterEstimate e) { multiscatter_light_estimate_ = e; }
+    // The estimate that light samples take (closures.h): light_sample (the default) as Cycles 3.x evaluates its
+    // Multiscatter GGX's random walk towards a light, light_sample_as_walk for Cycles 4.x, whose lobe is the same
+    // both ways. Never walk: light samples value refractions as Cycles does there (eval_refraction).
+    void set_multiscatter_light_estimate(MultiScatterEstimate e) {
+        multiscatter_light_estimate_ = e == MultiScatterEstimate::walk ? MultiScatterEstimate::light_sample_as_walk : e;
+    }
     MultiScatterEstimate multiscatter_light_estimate() const { return multiscatter_light_estimate_; }
 
 private:
