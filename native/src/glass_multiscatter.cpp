@@ -112,19 +112,28 @@ glm::vec3 scatter_on_facet(const glm::vec3& wi, float eta, const glm::vec3& m, f
 }
 
 // One walk entering from wo (z > 0): the number of scatterings before it left (0: it never did, within Cycles'
-// ten), and whether it left above the surface.
-int walk(const glm::vec3& wo, float eta, float alpha, Rng& rng, bool& above) {
+// ten), whether it left above the surface, and where given, the direction it left along and its throughput (`tint`
+// once per scattering after the first). It draws in Cycles' order (the height, the visible normal's y then x, the
+// facet's choice), so that on Cycles' own generator it runs on the numbers Cycles' walk does. Uniform: Rng or
+// CyclesLcg.
+template <class Uniform>
+int walk(const glm::vec3& wo, float eta, float alpha, Uniform& rng, bool& above, glm::vec3* direction = nullptr,
+         glm::vec3* weight = nullptr, const glm::vec3& tint = glm::vec3(1.0f)) {
     WalkState s;
     s.w = -wo;
     s.lambda = smith_lambda(s.w, alpha);
     bool outside = true;
+    glm::vec3 throughput(1.0f);
     for (int order = 0; order < kWalkOrders; ++order) {
         if (!next_height(s, rng.uniform())) {
             above = outside;
+            if (direction != nullptr) *direction = outside ? s.w : -s.w;
+            if (weight != nullptr) *weight = throughput;
             return order;
         }
-        const float u1 = rng.uniform(), u2 = rng.uniform();
-        const glm::vec3 m = visible_normal(-s.w, alpha, u1, u2);
+        const float uy = rng.uniform(), ux = rng.uniform();
+        const glm::vec3 m = visible_normal(-s.w, alpha, ux, uy);
+        if (order > 0) throughput *= tint;  // the first scattering's colour is the closure's weight
         bool reflected = false;
         glm::vec3 next = scatter_on_facet(-s.w, outside ? eta : 1.0f / eta, m, rng.uniform(), reflected);
         if (!reflected) {
@@ -169,7 +178,9 @@ float phase_towards(const glm::vec3& w, float lambda, const glm::vec3& wo, bool 
 
 // One estimate of Cycles' mf_eval (white glass, the tint per scattering after the first) from the view `view`
 // towards the light `light`: eval = f |light.z|. Cycles' quirks kept (see the header).
-glm::vec3 cycles_glass_eval(float eta, float alpha, const glm::vec3& tint, glm::vec3 view, glm::vec3 light, Rng& rng) {
+template <class Uniform>
+glm::vec3 cycles_glass_eval(float eta, float alpha, const glm::vec3& tint, glm::vec3 view, glm::vec3 light,
+                            Uniform& rng) {
     const bool light_outside = light.z >= 0.0f;
     bool swapped = false;
     if (view.z * light.z < 0.0f) {
@@ -201,8 +212,8 @@ glm::vec3 cycles_glass_eval(float eta, float alpha, const glm::vec3& tint, glm::
     bool outside = true;
     for (int order = 0; order < kWalkOrders; ++order) {
         if (!next_height(s, rng.uniform())) break;
-        const float u1 = rng.uniform(), u2 = rng.uniform();
-        const glm::vec3 m = visible_normal(-s.w, alpha, u1, u2);
+        const float uy = rng.uniform(), ux = rng.uniform();
+        const glm::vec3 m = visible_normal(-s.w, alpha, ux, uy);
         if (order > 0) {
             const float phase = outside ? phase_towards(s.w, s.lambda, light, light_outside, alpha, eta)
                                         : phase_towards(s.w, s.lambda, -light, !light_outside, alpha, 1.0f / eta);
@@ -417,6 +428,43 @@ glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec
     for (int k = 0; k < walks; ++k) sum += cycles_glass_eval(eta, a, glm::clamp(tint, 0.0f, 1.0f), wo, wi, rng);
     const glm::vec3 f = sum / (float(walks) * std::fabs(wi.z));
     return std::isfinite(f.x + f.y + f.z) ? glm::max(f, glm::vec3(0.0f)) : glm::vec3(0.0f);
+}
+
+CyclesLcg CyclesLcg::at_vertex(uint32_t path, int vertex) {
+    CyclesLcg lcg;
+    // lcg_state_init: lcg_init(rng_hash + rng_offset + sample * scramble), rng_offset = 16 (PRNG_BOUNCE_NUM) per
+    // surface met, counted from 1; lcg_init steps once.
+    lcg.state_ = path + 16u * (uint32_t(vertex) + 1u);
+    lcg.state_ = 1103515245u * lcg.state_ + 12345u;
+    return lcg;
+}
+
+float CyclesLcg::uniform() {
+    state_ = 1103515245u * state_ + 12345u;
+    return float(state_) * (1.0f / float(0xFFFFFFFFu));
+}
+
+glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                          const glm::vec3& wo, CyclesLcg& lcg) {
+    if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta) || !(wo.z > 0.0f) || !(wi.z != 0.0f))
+        return glm::vec3(0.0f);
+    const glm::vec3 f = cycles_glass_eval(eta, std::min(alpha, 1.0f), glm::clamp(tint, 0.0f, 1.0f), wo, wi, lcg) /
+                        std::fabs(wi.z);
+    return std::isfinite(f.x + f.y + f.z) ? glm::max(f, glm::vec3(0.0f)) : glm::vec3(0.0f);
+}
+
+glm::vec3 cycles3_multi_glass_walk_sample(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wo,
+                                          CyclesLcg& lcg, glm::vec3& wi) {
+    wi = glm::vec3(0.0f, 0.0f, 1.0f);
+    if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta) || !(wo.z > 0.0f)) return glm::vec3(0.0f);
+    bool above = false;
+    glm::vec3 weight(0.0f), direction(0.0f);
+    const float a = std::clamp(alpha, 1e-4f, 1.0f);
+    if (walk(wo, eta, a, lcg, above, &direction, &weight, glm::clamp(tint, 0.0f, 1.0f)) == 0) return glm::vec3(0.0f);
+    const float len = glm::length(direction);
+    if (!(len > 0.0f) || !std::isfinite(weight.x + weight.y + weight.z)) return glm::vec3(0.0f);
+    wi = direction / len;
+    return weight;
 }
 
 float cycles3_multi_glass_pdf(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo) {

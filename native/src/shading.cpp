@@ -512,6 +512,20 @@ bool bsdf_has_multi_ggx_glass(const Bsdf& b) {
     return false;
 }
 
+const Lobe* lone_multi_ggx_glass(const Bsdf& b, float side_z) {
+    if (b.lobe_count != 2 || !is_zero(b.lambert) || !is_zero(b.mirror) || !is_zero(b.refraction) ||
+        !is_zero(b.transparent))
+        return nullptr;
+    const Lobe& l0 = b.lobes[0];
+    const Lobe& l1 = b.lobes[1];
+    if (l0.distribution != Distribution::multi_ggx_glass || l1.distribution != Distribution::multi_ggx_glass ||
+        l0.kind == l1.kind || l0.eta != l1.eta || l0.alpha_x != l1.alpha_x || l0.weight != l1.weight ||
+        l0.specular_color != l1.specular_color)
+        return nullptr;
+    const bool reflect = side_z > 0.0f;
+    return (l0.kind == ClosureKind::reflection) == reflect ? &l0 : &l1;
+}
+
 bool bsdf_weighs_by_cycles_pick(const Bsdf& b) { return bsdf_has_clearcoat(b) || bsdf_has_multi_ggx_glass(b); }
 
 void choose_defensively(Bsdf& b) { b.selection_floor = bsdf_has_clearcoat(b) ? defensive_floor(b) : 0.0f; }

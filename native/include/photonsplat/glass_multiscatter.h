@@ -48,6 +48,33 @@ glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec
 // (Fresnel of the half vector between them), used only to weigh light samples against its directions.
 float cycles3_multi_glass_pdf(float eta, float alpha, const glm::vec3& wi, const glm::vec3& wo);
 
+// Cycles 3.x's random numbers for the walks of one shading point (kernel/sample/lcg.h): a 32-bit LCG seeded by
+// lcg_init(rng_hash + rng_offset + sample * scramble), where rng_offset grows by 16 per surface a path meets. So the
+// walks of one path at successive vertices run on the same numbers shifted by constants (the k-th by 16 a^k mod
+// 2^32, a the LCG's multiplier): Cycles' Multiscatter glass is not independent from one vertex to the next. Through
+// a slab of roughness 0.45 seen at cos 0.3, a path that meets both faces leaves through the bottom with 0.49 of the
+// light on Cycles' numbers and 0.34 on independent ones, in a narrow band of directions where independent walks
+// spread it. The reference runs a lone Multiscatter Glass on these numbers (reference/path_tracer.cpp).
+class CyclesLcg {
+public:
+    // At the vertex of a camera path that met `vertex` surfaces before (transparent ones counted, as Cycles counts
+    // them in rng_offset); `path` stands for rng_hash + sample * scramble, uniform over paths.
+    static CyclesLcg at_vertex(uint32_t path, int vertex);
+    float uniform();  // lcg_step_float: in [0, 1]
+
+private:
+    uint32_t state_ = 0;
+};
+// cycles3_multi_glass_light_value with one walk on `lcg`, as Cycles' light sample runs it (before the bounce's).
+glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                          const glm::vec3& wo, CyclesLcg& lcg);
+// Cycles 3.x's sampling walk from wo (local frame, wo.z > 0) on `lcg` (its mf_sample for glass): the direction it
+// leaves along in wi, and its weight per unit of the closure's weight (the tint once per scattering after the
+// first); 0 where the walk does not leave within Cycles' ten scatterings. mf_glass_pdf (cycles3_multi_glass_pdf) is
+// the density Cycles reports for it.
+glm::vec3 cycles3_multi_glass_walk_sample(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wo,
+                                          CyclesLcg& lcg, glm::vec3& wi);
+
 // The walk's energies for white glass (tint 1) at one (eta, alpha, cos_o), by side and by the number of
 // scatterings, estimated with `walks` walks (the table's own numbers: tests compare them with Cycles').
 struct GlassWalkEnergy {

@@ -120,6 +120,10 @@ bool bsdf_has_clearcoat(const Bsdf& b);
 // Whether b holds a Multiscatter GGX glass lobe, whose light samples and MIS density are Cycles' own
 // (cycles3_multi_glass_light_value, lobe_reported_pdf).
 bool bsdf_has_multi_ggx_glass(const Bsdf& b);
+// The lobe on wi's side of b where b is one Multiscatter GGX Glass alone (its two lobes of one η, α and weight,
+// nothing else): Cycles' one closure, sampled and valued as its own walks (CyclesLcg); otherwise nullptr. side_z:
+// wi's cosine with b.n (> 0 the reflection lobe, < 0 the refraction lobe).
+const Lobe* lone_multi_ggx_glass(const Bsdf& b, float side_z);
 // Whether what Cycles converges to at b depends on its MIS weights, so that they take the light's density times
 // Cycles' pick of that light: a clearcoat (above), or a Multiscatter GGX glass, whose light samples Cycles values by
 // an evaluation its walk does not agree with (cycles3_multi_glass_light_value, glass_multiscatter.h).

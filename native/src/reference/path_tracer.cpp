@@ -27,6 +27,7 @@
 
 #include "caustic_photons.h"
 #include "photonsplat/direct_light.h"
+#include "photonsplat/glass_multiscatter.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
 #include "photonsplat/material_program.h"
@@ -79,13 +80,72 @@ ViewSample far_side_vertex(const SurfacePoint& s, const Bsdf& b, const glm::vec3
     return v;
 }
 
+// A vertex on a lone Multiscatter GGX Glass (lone_multi_ggx_glass), in its local frame (n = +z), with Cycles'
+// random numbers for its walks there: Cycles runs the walks of one path's vertices on numbers shifted from one
+// another by constants (CyclesLcg), and what it converges to through such glass depends on that.
+struct CyclesGlassVertex {
+    glm::vec3 t{0.0f}, bt{0.0f}, n{0.0f};
+    CyclesLcg lcg;
+    glm::vec3 local(const glm::vec3& w) const { return {glm::dot(w, t), glm::dot(w, bt), glm::dot(w, n)}; }
+    glm::vec3 world(const glm::vec3& w) const { return w.x * t + w.y * bt + w.z * n; }
+};
+
+// The density Cycles reports for wi from the glass: mf_glass_pdf, both sides in one.
+float glass_reported_pdf(const Bsdf& b, const CyclesGlassVertex& g, const glm::vec3& wi) {
+    const glm::vec3 i = g.local(wi), o = g.local(b.wo);
+    const Lobe* lobe = lone_multi_ggx_glass(b, i.z);
+    return lobe != nullptr ? cycles3_multi_glass_pdf(lobe->eta, lobe->alpha_x, i, o) : 0.0f;
+}
+
+// Cycles' value of the glass towards a light sample at wi: its evaluation walk, on the vertex's numbers where this
+// is the one light sample Cycles takes there (`consumes`: it runs before the vertex's sampling walk, on the same
+// numbers), else on numbers of its own.
+glm::vec3 glass_light_value(const Bsdf& b, CyclesGlassVertex& g, const glm::vec3& wi, bool consumes) {
+    const glm::vec3 i = g.local(wi), o = g.local(b.wo);
+    const Lobe* lobe = lone_multi_ggx_glass(b, i.z);
+    if (lobe == nullptr) return glm::vec3(0.0f);
+    if (!consumes) return bsdf_eval(b, wi, LobeSet::all, MultiScatterEstimate::light_sample);
+    return lobe->weight * cycles3_multi_glass_light_value(lobe->eta, lobe->alpha_x, lobe->specular_color, i, o, g.lcg);
+}
+
+// The BSDF direction at a lone Multiscatter Glass, drawn by Cycles' sampling walk on the vertex's numbers (after its
+// light sample's), with the density Cycles reports for it.
+BsdfSample glass_walk_sample(const Bsdf& b, CyclesGlassVertex& g) {
+    BsdfSample out;
+    const glm::vec3 o = g.local(b.wo);
+    const Lobe* either = lone_multi_ggx_glass(b, 1.0f);
+    glm::vec3 i(0.0f);
+    const glm::vec3 weight =
+        cycles3_multi_glass_walk_sample(either->eta, either->alpha_x, either->specular_color, o, g.lcg, i);
+    const Lobe* lobe = lone_multi_ggx_glass(b, i.z);
+    if (weight == glm::vec3(0.0f) || lobe == nullptr) return out;
+    out.kind = ScatterKind::lobes;
+    out.direction = glm::normalize(g.world(i));
+    out.weight = lobe->weight * weight;
+    out.mis_pdf = out.pdf = cycles3_multi_glass_pdf(lobe->eta, lobe->alpha_x, i, o);
+    out.transmitted = i.z < 0.0f;
+    out.glossy = true;
+    return out;
+}
+
 // Next-event estimation at x over every source but a constant world, both sides of the surface (transmission lobes
-// see light from behind), weighted against the BSDF sampling of bsdf_sample.
+// see light from behind), weighted against the BSDF sampling of bsdf_sample. `glass`: the vertex is a lone
+// Multiscatter Glass (CyclesGlassVertex), sampled by Cycles' walk, whose density Cycles reports as mf_glass_pdf.
 glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const SurfacePoint& s, Rng& rng,
-                        PathCounters& counters) {
+                        PathCounters& counters, CyclesGlassVertex* glass) {
     glm::vec3 sum(0.0f);
     const bool transmits = bsdf_has(b, LobeSet::transmission);
     const bool cycles_weights = bsdf_weighs_by_cycles_pick(b);  // weights take Cycles' light densities (shading.h)
+    // Cycles samples one light per vertex, picked by its distribution; its glass walk runs on the vertex's numbers
+    // for that one. We sample every light, and let the one Cycles would have picked take those numbers.
+    size_t picked = c.sources.size();
+    if (glass != nullptr) {
+        float u = rng.uniform();
+        for (size_t l = 0; l < c.sources.size() && picked == c.sources.size(); ++l) {
+            u -= c.sources.cycles_pick_probability(l);
+            if (u < 0.0f) picked = l;
+        }
+    }
     for (size_t l = 0; l < c.sources.size(); ++l) {
         if (c.sources.is_world(l) && c.sources.world().constant()) continue;  // BSDF sampling alone (below)
         const float u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
@@ -98,8 +158,10 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         if (!front && !transmits && !below) continue;  // light from behind a surface that does not pass it on
         if (!front && glm::dot(in.wi, b.ng) == 0.0f) continue;
         if (in.value == glm::vec3(0.0f)) continue;
-        const glm::vec3 f = below ? bsdf_eval_shading_side(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate())
-                                  : bsdf_eval(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate());
+        const glm::vec3 f = glass != nullptr && !below
+                                ? glass_light_value(b, *glass, in.wi, l == picked)
+                            : below ? bsdf_eval_shading_side(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate())
+                                    : bsdf_eval(b, in.wi, LobeSet::all, c.scene.multiscatter_light_estimate());
         if (f == glm::vec3(0.0f)) continue;
         ++counters.shadow_rays;
         const glm::vec3 side = front || below ? b.ng : -b.ng;
@@ -111,7 +173,8 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
         if (t == glm::vec3(0.0f)) continue;
         const float p_light = cycles_weights ? c.sources.cycles_mis_density(l, s.position, in.wi, in.pdf) : in.pdf;
-        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(p_light, bsdf_sample_pdf(b, in.wi));
+        const float p_bsdf = glass != nullptr ? glass_reported_pdf(b, *glass, in.wi) : bsdf_sample_pdf(b, in.wi);
+        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(p_light, p_bsdf);
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
     return sum;
@@ -147,6 +210,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
     glm::vec3 radiance(0.0f), throughput(1.0f);
     LastScatter last;
     bool camera_ray = true;  // only transparency crossed so far: still the camera's ray, which sees no lights
+    const uint32_t cycles_numbers = rng.next_u32();  // the path's Cycles rng_hash + sample * scramble (CyclesLcg)
     for (int depth = 0;; ++depth) {
         Hit hit;
         ++counters.rays;
@@ -219,8 +283,19 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                                                        s.position, s.rounding_scale, rng, rays);
             counters.shadow_rays += rays;
         }
+        // Cycles 3.x's lone Multiscatter Glass: its walks on Cycles' numbers (CyclesLcg), light sample then bounce.
+        CyclesGlassVertex glass_vertex;
+        CyclesGlassVertex* glass = nullptr;
+        const Lobe* lone_glass = lone_multi_ggx_glass(b, 1.0f);
+        if (lone_glass != nullptr && lone_glass->alpha_x * lone_glass->alpha_x >= 1e-7f &&
+            c.scene.multiscatter_light_estimate() == MultiScatterEstimate::light_sample) {
+            glass_vertex.n = b.n;
+            orthonormal_basis(b.n, glass_vertex.t, glass_vertex.bt);
+            glass_vertex.lcg = CyclesLcg::at_vertex(cycles_numbers, depth);
+            glass = &glass_vertex;
+        }
         if (bsdf_has(b, LobeSet::all)) {
-            radiance += throughput * sample_lights(c, b, s, rng, counters);
+            radiance += throughput * sample_lights(c, b, s, rng, counters, glass);
             if (c.caustics && bsdf_has(b, LobeSet::reflection)) {
                 Lobe lobes[kMaxLobes];
                 const ViewSample v = vertex_at(s, b, origin, throughput, lobes);
@@ -230,7 +305,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
                 radiance += c.caustics->transmitted_radiance(far_side_vertex(s, b, origin, throughput), b);
         }
         const float u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-        const BsdfSample bs = bsdf_sample(b, u0, u1, u2);
+        const BsdfSample bs = glass != nullptr ? glass_walk_sample(b, *glass) : bsdf_sample(b, u0, u1, u2);
         if (bs.kind == ScatterKind::none) break;
         throughput *= bs.weight;
         const glm::vec3 side = bs.transmitted ? -s.geometric_normal : s.geometric_normal;
