@@ -416,18 +416,29 @@ float multi_ggx_glass_single(float eta, float alpha, const glm::vec3& wi, const 
            (wo.z * -wi.z * denominator * denominator);
 }
 
-glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
-                                          const glm::vec3& wo, int walks, uint64_t key) {
-    // Cycles' closure evaluates nothing below α² 1e-7 (its sharp glass), and clamps α to [1e-4, 1].
+namespace {
+
+// Cycles' light-sample value (f, no cosine) from `walks` of its evaluation walks on `rng`; 0 where Cycles evaluates
+// nothing (below α² 1e-7, its sharp glass) or the directions are unusable. α is clamped to 1 as Cycles clamps it.
+template <class Uniform>
+glm::vec3 light_value_over_walks(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                 const glm::vec3& wo, int walks, Uniform& rng) {
     if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta) || !(walks > 0) || !(wo.z > 0.0f) ||
         !(wi.z != 0.0f))
         return glm::vec3(0.0f);
     const float a = std::min(alpha, 1.0f);
-    Rng rng(key, RngDomain::glass_light_value, 0);
     glm::vec3 sum(0.0f);
     for (int k = 0; k < walks; ++k) sum += cycles_glass_eval(eta, a, glm::clamp(tint, 0.0f, 1.0f), wo, wi, rng);
     const glm::vec3 f = sum / (float(walks) * std::fabs(wi.z));
     return std::isfinite(f.x + f.y + f.z) ? glm::max(f, glm::vec3(0.0f)) : glm::vec3(0.0f);
+}
+
+}  // namespace
+
+glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
+                                          const glm::vec3& wo, int walks, uint64_t key) {
+    Rng rng(key, RngDomain::glass_light_value, 0);
+    return light_value_over_walks(eta, alpha, tint, wi, wo, walks, rng);
 }
 
 CyclesLcg CyclesLcg::at_vertex(uint32_t path, int vertex) {
@@ -446,11 +457,7 @@ float CyclesLcg::uniform() {
 
 glm::vec3 cycles3_multi_glass_light_value(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wi,
                                           const glm::vec3& wo, CyclesLcg& lcg) {
-    if (!(alpha * alpha >= 1e-7f) || !(eta > 0.0f) || !std::isfinite(eta) || !(wo.z > 0.0f) || !(wi.z != 0.0f))
-        return glm::vec3(0.0f);
-    const glm::vec3 f = cycles_glass_eval(eta, std::min(alpha, 1.0f), glm::clamp(tint, 0.0f, 1.0f), wo, wi, lcg) /
-                        std::fabs(wi.z);
-    return std::isfinite(f.x + f.y + f.z) ? glm::max(f, glm::vec3(0.0f)) : glm::vec3(0.0f);
+    return light_value_over_walks(eta, alpha, tint, wi, wo, 1, lcg);
 }
 
 glm::vec3 cycles3_multi_glass_walk_sample(float eta, float alpha, const glm::vec3& tint, const glm::vec3& wo,

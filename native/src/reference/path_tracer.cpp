@@ -101,10 +101,10 @@ float glass_reported_pdf(const Bsdf& b, const CyclesGlassVertex& g, const glm::v
 // is the one light sample Cycles takes there (`consumes`: it runs before the vertex's sampling walk, on the same
 // numbers), else on numbers of its own.
 glm::vec3 glass_light_value(const Bsdf& b, CyclesGlassVertex& g, const glm::vec3& wi, bool consumes) {
+    if (!consumes) return bsdf_eval(b, wi, LobeSet::all, MultiScatterEstimate::light_sample);
     const glm::vec3 i = g.local(wi), o = g.local(b.wo);
     const Lobe* lobe = lone_multi_ggx_glass(b, i.z);
     if (lobe == nullptr) return glm::vec3(0.0f);
-    if (!consumes) return bsdf_eval(b, wi, LobeSet::all, MultiScatterEstimate::light_sample);
     return lobe->weight * cycles3_multi_glass_light_value(lobe->eta, lobe->alpha_x, lobe->specular_color, i, o, g.lcg);
 }
 
