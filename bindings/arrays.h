@@ -51,7 +51,18 @@ struct LightReader {
     std::string field(const std::string& name) const;                       // "<kind> light '<light>'.<name>"
     glm::vec3 vector(const py::object& obj, const std::string& name) const;     // vec3 named field(name)
     glm::dvec3 position(const py::object& obj, const std::string& name) const;  // dvec3 named field(name)
+    // Cycles' per-light switches every add_*_light takes (ps::Light::multiple_importance, cast_shadow).
+    void switches(bool multiple_importance, bool cast_shadow) {
+        light.multiple_importance = multiple_importance;
+        light.cast_shadow = cast_shadow;
+    }
 };
+// The keyword arguments' documentation every add_*_light ends with.
+#define PS_LIGHT_SWITCHES_DOC                                                                                     \
+    " multiple_importance=False: Cycles' Multiple Importance off, no ray but the camera's meets the light (it is " \
+    "not seen in mirrors or glass, lights nothing through them) and its light samples take their full value; "     \
+    "cast_shadow=False: Cycles' Cast Shadow off, its light samples take no shadow ray."
+
 
 // (height, width, channels) float32 copy of a row-major buffer.
 py::array_t<float> image_array(const std::vector<float>& data, int height, int width, int channels);

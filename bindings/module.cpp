@@ -207,8 +207,9 @@ PYBIND11_MODULE(_core, m) {
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,
-               float radius, bool sphere) {
+               float radius, bool sphere, bool multiple_importance, bool cast_shadow) {
                 LightReader l(ps::LightKind::point, name);
+                l.switches(multiple_importance, cast_shadow);
                 const glm::dvec3 p = l.position(position, "position");
                 l.light.value = l.vector(intensity, "intensity");
                 l.light.radius = radius;
@@ -216,27 +217,32 @@ PYBIND11_MODULE(_core, m) {
                 s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "intensity"_a, "radius"_a = 0.0f, "sphere"_a = false,
+            "multiple_importance"_a = true, "cast_shadow"_a = true,
             "Isotropic point light; intensity in W/sr. radius > 0 gives it a size, of radiance I/(pi radius^2): "
             "sphere=False lights as a disc of that radius facing each receiver (Cycles 3.4, and Cycles 4.x with "
             "Soft Falloff on); sphere=True as a true sphere (Cycles 4.x with Soft Falloff off), which gives more "
-            "light than the disc near it (d not much larger than radius) and the same far away.")
+            "light than the disc near it (d not much larger than radius) and the same far away." PS_LIGHT_SWITCHES_DOC)
         .def(
             "add_sun_light",
             [](ps::Scene& s, const std::string& name, const py::object& direction, const py::object& irradiance,
-               float angle) {
+               float angle, bool multiple_importance, bool cast_shadow) {
                 LightReader l(ps::LightKind::sun, name);
+                l.switches(multiple_importance, cast_shadow);
                 l.light.direction = l.vector(direction, "direction");
                 l.light.value = l.vector(irradiance, "irradiance");
                 l.light.angle = angle;
                 s.add_light(l.light);
             },
-            "name"_a, "direction"_a, "irradiance"_a, "angle"_a = 0.0f,
-            "Distant light travelling along direction; irradiance in W/m²; angle = full angular diameter.")
+            "name"_a, "direction"_a, "irradiance"_a, "angle"_a = 0.0f, "multiple_importance"_a = true,
+            "cast_shadow"_a = true,
+            "Distant light travelling along direction; irradiance in W/m²; angle = full angular diameter." PS_LIGHT_SWITCHES_DOC)
         .def(
             "add_area_light",
             [](ps::Scene& s, const std::string& name, const py::object& center, const py::object& axis_u,
-               const py::object& axis_v, const py::object& radiance, const std::string& shape) {
+               const py::object& axis_v, const py::object& radiance, const std::string& shape,
+               bool multiple_importance, bool cast_shadow) {
                 LightReader l(ps::LightKind::area, name);
+                l.switches(multiple_importance, cast_shadow);
                 const glm::dvec3 c = l.position(center, "center");
                 l.light.axis_u = l.vector(axis_u, "axis_u");
                 l.light.axis_v = l.vector(axis_v, "axis_v");
@@ -247,8 +253,9 @@ PYBIND11_MODULE(_core, m) {
                 s.add_light(l.light, c);
             },
             "name"_a, "center"_a, "axis_u"_a, "axis_v"_a, "radiance"_a, "shape"_a = "rectangle",
+            "multiple_importance"_a = true, "cast_shadow"_a = true,
             "One-sided rectangle with full edge vectors u, v (or, shape='ellipse', the ellipse inscribed in it), "
-            "emitting radiance towards cross(u, v).")
+            "emitting radiance towards cross(u, v)." PS_LIGHT_SWITCHES_DOC)
         .def(
             "set_background", [](ps::Scene& s, const py::object& radiance) { s.set_background(vec3(radiance, "background")); },
             "radiance"_a)

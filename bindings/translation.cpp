@@ -246,8 +246,9 @@ void bind_translation(py::module_& m) {
             "add_spot_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& direction,
                const py::object& intensity, float spot_size, float spot_blend, float radius, bool sphere,
-               bool spot_cosine) {
+               bool spot_cosine, bool multiple_importance, bool cast_shadow) {
                 LightReader l(ps::LightKind::spot, name);
+                l.switches(multiple_importance, cast_shadow);
                 const glm::dvec3 p = l.position(position, "position");
                 l.light.direction = l.vector(direction, "direction");
                 l.light.value = l.vector(intensity, "intensity");
@@ -259,12 +260,14 @@ void bind_translation(py::module_& m) {
                 s.add_light(l.light, p);
             },
             "name"_a, "position"_a, "direction"_a, "intensity"_a, "spot_size"_a, "spot_blend"_a = 0.0f,
-            "radius"_a = 0.0f, "sphere"_a = false, "spot_cosine"_a = true,
+            "radius"_a = 0.0f, "sphere"_a = false, "spot_cosine"_a = true, "multiple_importance"_a = true,
+            "cast_shadow"_a = true,
             "Spot light: intensity (W/sr) on its axis `direction`, full cone angle spot_size (radians), edge "
             "blend in [0, 1]. spot_cosine=True: Cycles 3.4's falloff cos θ · smoothstep; False: Cycles 4.x's "
             "smoothstep alone (no cos θ, so 1/cos θ brighter off the axis). radius and sphere as add_point_light's: "
             "sphere=False a disc facing the receiver (Cycles 3.4, and 4.x with Soft Falloff on), True a true "
-            "sphere (Cycles 4.x with Soft Falloff off) whose cone attenuates each ray along its own direction.")
+            "sphere (Cycles 4.x with Soft Falloff off) whose cone attenuates each ray along its own direction."
+            PS_LIGHT_SWITCHES_DOC)
         .def_property_readonly("mesh_count", [](const ps::Scene& s) { return s.meshes().size(); })
         .def_property_readonly("instance_count", [](const ps::Scene& s) { return s.instances().size(); })
         .def_property_readonly("texture_count", [](const ps::Scene& s) { return s.textures().size(); })

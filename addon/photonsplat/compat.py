@@ -183,6 +183,25 @@ def light_panel_properties(light):
     return names
 
 
+# Cycles' per-light switches. Multiple Importance is light.cycles.use_multiple_importance_sampling in 3.4 and 4.5;
+# Cast Shadow is light.cycles.cast_shadow in 3.4 and light.use_shadow from 4.0 (3.4's use_shadow is EEVEE's, which
+# Cycles 3.4 ignores). light.cycles is the Cycles add-on's: absent without it, then both read as on (the default).
+def light_switch_owners(light):
+    """(owner, property name) of the light's Multiple Importance and Cast Shadow switches as this Blender's Cycles
+    keeps them (for the light panel); an owner is None where the Cycles add-on is not loaded."""
+    cycles = getattr(light, "cycles", None)
+    shadow_owner = light if CYCLES_4_LIGHTS else cycles
+    return ((cycles, "use_multiple_importance_sampling"),
+            (shadow_owner, "use_shadow" if CYCLES_4_LIGHTS else "cast_shadow"))
+
+
+def light_switches(light):
+    """The core's multiple_importance and cast_shadow keyword arguments for `light` (add_*_light)."""
+    (mis_owner, mis_name), (shadow_owner, shadow_name) = light_switch_owners(light)
+    return {"multiple_importance": bool(getattr(mis_owner, mis_name, True)),
+            "cast_shadow": bool(getattr(shadow_owner, shadow_name, True))}
+
+
 def spot_cone_follows_scale():
     """Whether a non-uniform object scale squeezes a spot's cone into an ellipse (Cycles 4.x); 3.4 reads only
     the direction."""

@@ -185,6 +185,11 @@ class DATA_PT_photonsplat_light(DataBlockPanel, Panel):
             else:
                 col.prop(light, "size", text="Size X")
                 col.prop(light, "size_y", text="Y")
+        (mis_owner, mis_name), (shadow_owner, shadow_name) = compat.light_switch_owners(light)
+        if shadow_owner is not None:
+            col.prop(shadow_owner, shadow_name, text="Cast Shadow")
+        if mis_owner is not None:
+            col.prop(mis_owner, mis_name, text="Multiple Importance")
         # What the export approximates or skips of this light, in the words of the render report.
         _draw_notes(layout, lights.conversion_notes(light))
 

@@ -148,15 +148,18 @@ glm::vec3 near_mirror_light(const DirectLightContext& c, const Bsdf& b, const gl
             if (!(glm::dot(in.wi, b.ng) > 0.0f) || is_black(in.value)) continue;
             const Cycles3MirrorValue v = cycles3_multiscatter_mirror_eval(alpha, b.n, in.wi, b.wo);
             if (!(v.f > 0.0f)) continue;
-            const float w = delta ? 1.0f : power_heuristic(sources.cycles_lamp_pdf(l, x, in.wi), v.pdf);
+            const float w = delta || !sources.found_by_bsdf_rays(l)
+                                ? 1.0f
+                                : power_heuristic(sources.cycles_lamp_pdf(l, x, in.wi), v.pdf);
             const float scale = v.f * glm::dot(in.wi, b.n) * w;
             if (!(scale > 0.0f) || !std::isfinite(scale)) continue;
             ++rays;
             const ShadowSegment segment = shadow_segment(x, origin, in);
-            const glm::vec3 t = c.transparency ? shadow_transmittance(c.scene, segment.ray, segment.t_max, true)
-                                               : (tracer.occluded(segment.ray, 0.0f, segment.t_max, kShadowRays)
-                                                      ? glm::vec3(0.0f)
-                                                      : glm::vec3(1.0f));
+            const glm::vec3 t = !sources.casts_shadow(l) ? glm::vec3(1.0f)  // Cast Shadow off
+                                : c.transparency ? shadow_transmittance(c.scene, segment.ray, segment.t_max, true)
+                                                 : (tracer.occluded(segment.ray, 0.0f, segment.t_max, kShadowRays)
+                                                        ? glm::vec3(0.0f)
+                                                        : glm::vec3(1.0f));
             light_sum += in.value * t * scale;
         }
         sum += light_sum / static_cast<float>(n);
@@ -209,8 +212,14 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         glm::vec3 value[RayTracer::kPacketRays];
         float scale[RayTracer::kPacketRays];
         int pending = 0;
+        // A light with Cast Shadow off takes no shadow ray (Light::cast_shadow): every sample counts.
+        const bool shadowed = sources.casts_shadow(l);
+        // Multiple Importance off: the BSDF directions below never meet the light, so its samples take weight 1.
+        const bool light_mis = !delta && sources.found_by_bsdf_rays(l);
         const auto trace_pending = [&] {
-            if (transparency) {
+            if (!shadowed) {
+                for (int j = 0; j < pending; ++j) light_sum += value[j] * scale[j];
+            } else if (transparency) {
                 for (int j = 0; j < pending; ++j) {
                     const glm::vec3 t = shadow_transmittance(scene, shadow[j], t_max[j], true);
                     if (!is_black(t)) light_sum += value[j] * t * scale[j];
@@ -254,8 +263,8 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
             const float p_light = cycles_weights ? sources.cycles_mis_density(l, x, in.wi, in.pdf) : in.pdf;
-            const float p_bsdf = (delta || !weighted) ? 0.0f : bsdf_pdf(b, in.wi, set);
-            const float w = (delta || !weighted) ? 1.0f
+            const float p_bsdf = (!light_mis || !weighted) ? 0.0f : bsdf_pdf(b, in.wi, set);
+            const float w = (!light_mis || !weighted) ? 1.0f
                             : probes == n        ? power_heuristic(p_light, p_bsdf)
                                                  : power_heuristic(float(n) * p_light, float(probes) * p_bsdf);
             const ShadowSegment segment =
@@ -302,7 +311,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays);
             for (size_t l = 0; l < sources.size() && mis; ++l) {
                 const Light* light = sources.light(l);
-                if (!light || sources.is_delta(l)) continue;
+                if (!light || sources.is_delta(l) || !sources.found_by_bsdf_rays(l)) continue;
                 const LightHit h = intersect_light(*light, x, bs.direction);
                 if (!h.hit || !(h.distance >= travelled) || (found && !(h.distance < travelled + hit.t))) continue;
                 const float p_light = cycles_weights ? sources.cycles_mis_density(l, x, bs.direction, h.pdf) : h.pdf;

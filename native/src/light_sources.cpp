@@ -166,6 +166,7 @@ float LightSources::cycles_emissive_pdf(uint32_t instance, uint32_t triangle, co
 
 float LightSources::mirror_weight(size_t i, const glm::vec3& x, const glm::vec3& origin, const glm::vec3& n,
                                   const glm::vec3& wi, float mirror_pdf) const {
+    if (!found_by_bsdf_rays(i)) return 0.0f;  // no BSDF ray meets it: the light-sample side keeps it all
     if (!(mirror_pdf > 0.0f)) return 1.0f;
     if (is_delta(i)) return 0.0f;
     switch (sources_[i].kind) {

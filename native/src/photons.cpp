@@ -153,13 +153,25 @@ glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
+// A light with Cast Shadow off lights every surface facing it, occluded or not (Cycles takes no shadow ray for its
+// samples), and what Cycles' camera paths find of its indirect light starts at such surfaces: a path's next-event
+// estimation at a surface behind an occluder still sees it. So each of its photons stands for its light at every
+// surface along its emission ray: the ordinary path (`line_first`) scatters at the first surface as usual, and
+// one copy of the photon (`line_copy`) starts at each surface beyond it with the full power (no occlusion, no
+// transparency on the way: shadow_ray_setup casts nothing). A copy goes on only by the surface's lobes: a light
+// reflected by a mirror or sharp glass is found by a BSDF ray, which is occluded as usual, and that is the ordinary
+// path's. For the same reason the ordinary path, where transparency lets it reach the next surface still direct,
+// leaves that surface's lobes to its copy.
+enum class LineRole { ordinary, line_first, line_copy };
+
 // Follows one photon from its emission, appending what it stores to `out`. At each surface the photon is
 // stored where the surface has reflection parts a view sample could hold (except where it arrives straight from
 // the light, through transparency at most: direct light), then goes on by sampling the whole closure sum (shading.h), with Russian roulette on the weight so
 // that surviving photons keep about the power they arrived with. Only delta parts (mirrors, sharp refraction,
 // transparency) keep a path a caustic one: light → delta+ → stored.
 void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonSource& source, glm::vec3 power,
-                const PathOptions& options, Rng& rng, std::vector<Photon>& out, const CausticWeighting& weighting = {}) {
+                const PathOptions& options, Rng& rng, std::vector<Photon>& out, const CausticWeighting& weighting = {},
+                LineRole role = LineRole::ordinary) {
     const RayTracer& tracer = scene.ray_tracer();
     Ray ray{emitted.origin, emitted.direction};
     bool only_specular_so_far = true;
@@ -177,7 +189,10 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         if (vertex == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
+        // A shadowless light's photon still direct beyond transparency: this surface's lobes are its copy's.
+        const bool lobes_to_copy = role == LineRole::line_first && direct && vertex > 0;
         if (m.lambert_only) {
+            if (lobes_to_copy) return;
             // Most surfaces: stored, then a cosine-weighted bounce with roulette on the albedo (no Bsdf to build).
             if (!direct) {
                 const bool caustic = only_specular_so_far;
@@ -244,6 +259,13 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         }
         const BsdfSample step = bsdf_sample(drawn_from, u0, u1, u2);
         if (step.kind == ScatterKind::none) return;
+        if (step.kind == ScatterKind::lobes && lobes_to_copy) return;
+        if (role == LineRole::line_copy && direct && step.kind != ScatterKind::lobes) return;  // the ordinary path's
+        // Multiple Importance off: a camera path would find this light through a mirror or sharp glass only by a
+        // BSDF ray, which never meets it (Light::multiple_importance): the path carries nothing from here on.
+        if (direct && (step.kind == ScatterKind::mirror || step.kind == ScatterKind::refraction) &&
+            source.sources != nullptr && !source.sources->found_by_bsdf_rays(source.index))
+            return;
         if (step.kind == ScatterKind::lobes) {
             if (kept.active) {
                 const ScatterLabel label = scatter_label(b, step.direction);
@@ -290,6 +312,27 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
     }
 }
 
+// The copies of a shadowless light's photon (LineRole): one from each surface beyond the first along its emission
+// ray, up to kMaxLineSurfaces of them.
+constexpr int kMaxLineSurfaces = 64;
+void trace_line_copies(const Scene& scene, const EmissionSample& emitted, const PhotonSource& source,
+                       const glm::vec3& power, const PathOptions& options, Rng& rng, std::vector<Photon>& out) {
+    const RayTracer& tracer = scene.ray_tracer();
+    Ray line{emitted.origin, emitted.direction};
+    Hit hit;
+    if (!tracer.intersect(line, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
+    for (int k = 0; k < kMaxLineSurfaces; ++k) {
+        const SurfacePoint s = surface_at(scene, line, hit, ShaderRay::photon);
+        const glm::vec3 beyond = glm::dot(line.direction, s.geometric_normal) > 0.0f ? s.geometric_normal
+                                                                                     : -s.geometric_normal;
+        line.origin = offset_ray_origin(s.position, beyond, s.rounding_scale);
+        if (!tracer.intersect(line, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
+        EmissionSample copy = emitted;
+        copy.origin = line.origin;
+        trace_path(scene, copy, source, power, options, rng, out, {}, LineRole::line_copy);
+    }
+}
+
 // One photon of `source`: its emission (redistributed by the source's guide, if any), then its path.
 void trace_one_photon(const Scene& scene, const LightSources& sources, size_t source, float source_probability,
                       const EmissionGuide& guide, const CausticAim& aim, const PathOptions& options, Rng& rng,
@@ -301,8 +344,11 @@ void trace_one_photon(const Scene& scene, const LightSources& sources, size_t so
     const EmissionSample emitted = sources.sample_emission(source, u1, u2, u3, u4, u5);
     CausticWeighting weighting;
     if (aim.active() && aim.aimed_probability(source) > 0.0f) weighting = {&aim, source, false};
-    trace_path(scene, emitted, PhotonSource{&sources, source}, emitted.power * (weight / source_probability), options,
-               rng, out, weighting);
+    const glm::vec3 power = emitted.power * (weight / source_probability);
+    const bool shadowless = !sources.casts_shadow(source);
+    trace_path(scene, emitted, PhotonSource{&sources, source}, power, options, rng, out, weighting,
+               shadowless ? LineRole::line_first : LineRole::ordinary);
+    if (shadowless) trace_line_copies(scene, emitted, PhotonSource{&sources, source}, power, options, rng, out);
 }
 
 // One photon aimed at a mirror or glass object (caustic_aim.h): only its caustic photon is kept.

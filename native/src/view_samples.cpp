@@ -206,7 +206,8 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
         if (!path.camera_ray && emitter_weight(path) > 0.0f && p.sources != nullptr) {
             for (size_t l = 0; l < p.sources->size(); ++l) {
                 const Light* light = p.sources->light(l);
-                if (light == nullptr || p.sources->is_delta(l)) continue;
+                // Multiple Importance off: Cycles' rays after a bounce never meet the light (Light::multiple_importance).
+                if (light == nullptr || p.sources->is_delta(l) || !p.sources->found_by_bsdf_rays(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const float w =

@@ -12,6 +12,11 @@ Blender, which compat.py holds (light_color_power, point_intensity, area_radianc
   area   one-sided rectangle emitting radiance along local -Z: L = c P / (4 A) in 3.4 (flux pi/4 P),
          L = c P / (pi A) in 4.x (flux P), where A is the area including the object's scale.
          Disk and ellipse lights are native ellipses: A = π/4 size_x size_y (scale included), as in Cycles.
+  switches  Cycles' Multiple Importance (light.cycles.use_multiple_importance_sampling) and Cast Shadow (3.4:
+         light.cycles.cast_shadow, 4.x: light.use_shadow) go to the core as multiple_importance and cast_shadow
+         (compat.light_switches): off, no ray but the camera's meets the light and its light samples take full
+         weight; no shadow rays. Followed in the reference and in Photon Splat (docs/translation.md, "Light
+         switches").
   portal an area light with Cycles' Portal on (light.cycles.is_portal) emits nothing: it guides the world's
          sampling through its rectangle (Scene.add_portal: corner and edges, light passing along
          cross(edge_u, edge_v) = the light's local -Z); a disk or ellipse portal is its bounding rectangle.
@@ -32,6 +37,7 @@ def export_light(core_scene, name, light, matrix, notes):
         return _export_portal(core_scene, name, light, matrix, notes)
     tint = _node_tint(light, notes)
     rgb = tuple(c * t for c, t in zip(compat.light_color_power(light), tint))
+    switches = compat.light_switches(light)
 
     if light.type == 'SPOT':
         # Cycles 3.4 ignores the object's scale for the cone (it reads only the direction); 4.x squeezes the
@@ -42,24 +48,27 @@ def export_light(core_scene, name, light, matrix, notes):
         core_scene.add_spot_light(name=name, position=tuple(matrix.translation), direction=tuple(direction),
                                   intensity=compat.point_intensity(light, rgb),
                                   spot_size=float(light.spot_size), spot_blend=float(light.spot_blend),
-                                  radius=float(light.shadow_soft_size), **compat.point_light_shape(light))
+                                  radius=float(light.shadow_soft_size), **compat.point_light_shape(light),
+                                  **switches)
         return True
     if light.type == 'POINT':
         core_scene.add_point_light(name=name, position=tuple(matrix.translation),
                                    intensity=compat.point_intensity(light, rgb),
-                                   radius=float(light.shadow_soft_size), **compat.point_light_shape(light))
+                                   radius=float(light.shadow_soft_size), **compat.point_light_shape(light),
+                                   **switches)
         return True
     if light.type == 'SUN':
         direction = (matrix.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
-        core_scene.add_sun_light(name=name, direction=tuple(direction), irradiance=rgb, angle=float(light.angle))
+        core_scene.add_sun_light(name=name, direction=tuple(direction), irradiance=rgb, angle=float(light.angle),
+                                 **switches)
         return True
     if light.type == 'AREA':
-        return _export_area_light(core_scene, name, light, matrix, rgb, notes)
+        return _export_area_light(core_scene, name, light, matrix, rgb, notes, switches)
     notes.append(f"Light '{name}': type {light.type} not supported, skipped")
     return False
 
 
-def _export_area_light(core_scene, name, light, matrix, rgb, notes):
+def _export_area_light(core_scene, name, light, matrix, rgb, notes, switches):
     size_x = float(light.size)
     size_y = float(light.size_y) if light.shape in ('RECTANGLE', 'ELLIPSE') else size_x
     # The matrix columns carry the object's rotation and scale: Cycles' light size includes the scale.
@@ -82,7 +91,7 @@ def _export_area_light(core_scene, name, light, matrix, rgb, notes):
         axis_u, axis_v = axis_v, axis_u
     core_scene.add_area_light(name=name, center=tuple(matrix.translation), axis_u=tuple(axis_u),
                               axis_v=tuple(axis_v), radiance=compat.area_radiance(light, rgb, area),
-                              shape="ellipse" if round_shape else "rectangle")
+                              shape="ellipse" if round_shape else "rectangle", **switches)
     return True
 
 

@@ -30,6 +30,11 @@ public:
     // The world as a light (never null); constant(): sampled cosine-weighted, the Lambert part's own density.
     const WorldLight& world() const { return *world_; }
     const Light* light(size_t i) const { return sources_[i].light; }          // nullptr unless a scene light
+    // Whether rays other than the camera's (BSDF rays, photon-side mirror chains) meet source i: false for a light
+    // with Multiple Importance off (Light::multiple_importance), whose light samples then take weight 1.
+    bool found_by_bsdf_rays(size_t i) const { return sources_[i].light == nullptr || sources_[i].light->multiple_importance; }
+    // Whether source i's light samples take a shadow ray: false for a light with Cast Shadow off.
+    bool casts_shadow(size_t i) const { return sources_[i].light == nullptr || sources_[i].light->cast_shadow; }
 
     // Solid-angle density with which sample_incidence of the emissive surfaces draws the point y of
     // `triangle` of `instance` from x (0 when it does not emit): for MIS of BSDF rays that hit emitters.
@@ -49,7 +54,8 @@ public:
     // `mirror_pdf` for wi (mirror_reported_pdf, shading.h; n: its geometric normal on wi's side, `origin` x
     // offset for a ray along wi): its BSDF ray meets the source with mirror_emitter_weight (direct_light.h)
     // against the source's light-sampling density from x, Cycles' pick of it included; a delta light, which no
-    // BSDF ray meets, keeps nothing. 1 for mirror_pdf 0 (a true mirror). For a photon's first scatter.
+    // BSDF ray meets, keeps nothing, nor does a light with Multiple Importance off (found_by_bsdf_rays), whatever
+    // the mirror. 1 for mirror_pdf 0 (a true mirror). For a photon's first scatter.
     float mirror_weight(size_t i, const glm::vec3& x, const glm::vec3& origin, const glm::vec3& n,
                         const glm::vec3& wi, float mirror_pdf) const;
 

@@ -36,6 +36,15 @@ struct Light {
     float spot_size = 0.0f;      // spot: full cone angle in radians, in (0, π]
     float spot_blend = 0.0f;     // spot: softness of the cone's edge, in [0, 1]
     bool spot_cosine = true;     // spot: the falloff has Cycles 3.4's cos θ factor (false: Cycles 4.x's, without)
+    // Cycles' "Multiple Importance" (light.cycles.use_multiple_importance_sampling, flag SHADER_USE_MIS). Off: no
+    // ray but the camera's meets the light (lights_intersect, light_sample_from_distant_ray skip it), so a BSDF ray
+    // after any bounce, a mirror's or sharp glass's included, finds nothing there, and its light samples take their
+    // full value, without an MIS weight. Its light therefore reaches nothing through mirrors and sharp glass.
+    bool multiple_importance = true;
+    // Cycles' "Cast Shadow" (3.4: light.cycles.cast_shadow, 4.x: light.use_shadow; flag SHADER_CAST_SHADOW). Off:
+    // its light samples take no shadow ray (shadow_ray_setup: nothing occludes them, not even transparency), so
+    // every surface facing it is lit directly; BSDF rays still meet it only where nothing is in the way.
+    bool cast_shadow = true;
 
     glm::vec3 area_normal() const;  // unit normal of the emitting side of an area light
     float area() const;             // area light surface area (π/4 of the rectangle's for an ellipse)

@@ -30,7 +30,8 @@ constexpr float kCosNormalTolerance = 0.5f;  // τ = 60°, render()'s default
 
 bool caustics_by_photons(const LightSources& sources, size_t i) {
     const Light* light = sources.light(i);
-    return light &&
+    // A light with Multiple Importance off has no L S+ D paths at all: Cycles' BSDF rays never meet it.
+    return light && light->multiple_importance &&
            (light->kind == LightKind::point || light->kind == LightKind::spot || light->kind == LightKind::sun);
 }
 

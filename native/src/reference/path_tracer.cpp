@@ -5,7 +5,8 @@
 //   - every light source except the world is sampled once (LightSources::sample_incidence) and weighted by
 //     w = p_light² / (p_light² + p_bsdf²) (where x holds a clearcoat or Multiscatter GGX glass, p_light times
 //     Cycles' probability of picking that light: bsdf_weighs_by_cycles_pick; p_bsdf the density Cycles reports,
-//     BsdfSample::mis_pdf); delta lights (p_light = 0 by convention) get w = 1;
+//     BsdfSample::mis_pdf); delta lights (p_light = 0 by convention) and lights with Multiple Importance off (which
+//     no BSDF ray meets: Light::multiple_importance) get w = 1; a light with Cast Shadow off takes no shadow ray;
 //   - this pass's caustic photons are gathered (the L S+ D paths of point and spot lights and suns, never
 //     counted here), through the reflection parts from x's side and through the transmission parts from the
 //     other;
@@ -170,11 +171,18 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
             : side == b.ng        ? terminator_origin(s.position, lift, b.n, side, in.wi)
                                   : terminator_origin(s.position, terminator_lift(c.scene, s, side), b.n, side, in.wi);
         const ShadowSegment segment = shadow_segment(s.position, offset_ray_origin(start, side, s.rounding_scale), in);
-        const glm::vec3 t = shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency);
+        // Cast Shadow off: no shadow ray, nothing occludes the sample (Cycles' shadow_ray_setup).
+        const glm::vec3 t = c.sources.casts_shadow(l)
+                                ? shadow_transmittance(c.scene, segment.ray, segment.t_max, c.transparency)
+                                : glm::vec3(1.0f);
         if (t == glm::vec3(0.0f)) continue;
-        const float p_light = cycles_weights ? c.sources.cycles_mis_density(l, s.position, in.wi, in.pdf) : in.pdf;
-        const float p_bsdf = glass != nullptr ? glass_reported_pdf(b, *glass, in.wi) : bsdf_sample_pdf(b, in.wi);
-        const float w = c.sources.is_delta(l) ? 1.0f : power_heuristic(p_light, p_bsdf);
+        // Multiple Importance off: no BSDF ray meets the light (below), so its samples keep their full value.
+        float w = 1.0f;
+        if (!c.sources.is_delta(l) && c.sources.found_by_bsdf_rays(l)) {
+            const float p_light = cycles_weights ? c.sources.cycles_mis_density(l, s.position, in.wi, in.pdf) : in.pdf;
+            const float p_bsdf = glass != nullptr ? glass_reported_pdf(b, *glass, in.wi) : bsdf_sample_pdf(b, in.wi);
+            w = power_heuristic(p_light, p_bsdf);
+        }
         sum += f * in.value * t * (std::fabs(glm::dot(in.wi, b.n)) * w);
     }
     return sum;
@@ -225,7 +233,7 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
             const bool weighed_from_last = last.nonspecular && !last.specular_since;
             for (size_t l = 0; l < c.sources.size(); ++l) {
                 const Light* light = c.sources.light(l);
-                if (!light) continue;
+                if (!light || !c.sources.found_by_bsdf_rays(l)) continue;  // Multiple Importance off: only camera rays
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const LightHit drawn = weighed_from_last ? intersect_light(*light, last.x, ray.direction) : h;
