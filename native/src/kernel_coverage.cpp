@@ -74,7 +74,7 @@ ProbeHit probe_from(const Scene& scene, const Ray& ray, Hit hit, float length, c
         }
         if (crossing == kMaxSpecularCrossings) return {};
         const float t_min = std::nextafter(hit.t, length) + 1e-6f * length;  // just past the specular surface
-        if (!scene.ray_tracer().intersect(ray, t_min, length, hit, kIndirectRays)) return {};
+        if (!scene.ray_tracer().intersect(ray, t_min, length, hit, kPhotonReceivers)) return {};
     }
 }
 
@@ -128,7 +128,7 @@ float sample_coverage(const Scene& scene, const ViewSample& s, const glm::vec3& 
     }
     Hit first[kCoverageProbes];
     bool found[kCoverageProbes];
-    scene.ray_tracer().intersect(rays, t_min, length, kCoverageProbes, kIndirectRays, first, found);
+    scene.ray_tracer().intersect(rays, t_min, length, kCoverageProbes, kPhotonReceivers, first, found);
     float area = 0.0f;
     for (int k = 0; k < kCoverageProbes; ++k) {
         if (!found[k]) continue;

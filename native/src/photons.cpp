@@ -34,6 +34,9 @@ namespace {
 // order: the photon map is then the same whatever the number of threads.
 constexpr uint64_t kChunk = 4096;
 
+// Surfaces no bounce sees that one photon path passes through (stacked ones beyond this end it).
+constexpr int kMaxPassedSurfaces = 64;
+
 // Sources are chosen in proportion to the luminance of their flux, so photons carry near-equal power.
 struct SourceChoice {
     std::vector<float> cdf;
@@ -182,9 +185,51 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
     bool direct = true;
     bool after_glossy = false;  // kAfterGlossy
     float caustic_weight = 1.0f;
+    // Stores the photon where it arrives at s (reflected: s has parts a view sample on its own side gathers by;
+    // far_side: a caustic one kept for the far side of a translucent s; inside: s lies within a transmitter).
+    const auto store = [&](const SurfacePoint& s, bool reflected, bool far_side, bool inside) {
+        const bool caustic = only_specular_so_far;
+        const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
+                               (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
+                               (far_side ? static_cast<uint32_t>(kFarSidePhoton) : 0u) |
+                               (reflected ? 0u : static_cast<uint32_t>(kFarSideOnly)) |
+                               (after_glossy ? static_cast<uint32_t>(kAfterGlossy) : 0u);
+        Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power, flags,
+                      {}};
+        kept.set_shares(photon);
+        out.push_back(photon);
+    };
+    int crossings = 0;  // surfaces no bounce sees, passed through
     for (int vertex = 0; vertex <= options.max_bounces; ++vertex) {
         Hit hit;
-        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
+        if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kAllRays)) return;
+        // A surface no bounce sees (Object > Visibility > Ray Visibility: diffuse, glossy and transmission off).
+        // In Cycles no ray after a bounce meets it, so it passes no light on and hides nothing from the paths
+        // beyond it, but its own paths see the rest: the camera finds there the light other surfaces send it. So
+        // the photon is stored there (where the camera can see it) and goes on through it unchanged. Straight from
+        // the light it is what a shadow ray meets: where the surface casts shadows, nothing lit behind it.
+        const uint32_t seen_by = scene.instances()[hit.instance].visibility;
+        if (!(seen_by & kIndirectRays)) {
+            if (direct && (seen_by & kShadowRays)) return;
+            const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
+            if (!direct && (seen_by & kCameraRays) && (s.material->has_delta || s.material->has_lobes)) {
+                if (s.material->lambert_only) {
+                    store(s, true, false, false);
+                } else {
+                    const Bsdf b = shade(scene, s, -ray.direction);
+                    const bool reflected = bsdf_has(b, LobeSet::reflection);
+                    const bool far_side = only_specular_so_far && s.material->translucent &&
+                                          translucent_albedo(b) != glm::vec3(0.0f);
+                    if (reflected || far_side) store(s, reflected, far_side, inside_transmitter(s));
+                }
+            }
+            if (++crossings > kMaxPassedSurfaces) return;
+            const glm::vec3 beyond = glm::dot(ray.direction, s.geometric_normal) > 0.0f ? s.geometric_normal
+                                                                                       : -s.geometric_normal;
+            ray.origin = offset_ray_origin(s.position, beyond, s.rounding_scale);
+            --vertex;  // not a bounce
+            continue;
+        }
         const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
         if (vertex == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
         const Material& m = *s.material;
@@ -194,15 +239,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         if (m.lambert_only) {
             if (lobes_to_copy) return;
             // Most surfaces: stored, then a cosine-weighted bounce with roulette on the albedo (no Bsdf to build).
-            if (!direct) {
-                const bool caustic = only_specular_so_far;
-                Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
-                              (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                  (after_glossy ? static_cast<uint32_t>(kAfterGlossy) : 0u),
-                              {}};
-                kept.set_shares(photon);
-                out.push_back(photon);
-            }
+            if (!direct) store(s, true, false, false);
             kept.scatter(1.0f, glm::vec3(1.0f));
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
@@ -228,16 +265,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         const bool reflected = bsdf_has(b, LobeSet::reflection);
         const bool far_side = only_specular_so_far && m.translucent && translucent_albedo(b) != glm::vec3(0.0f);
         if (!direct && (reflected || far_side)) {
-            const bool caustic = only_specular_so_far, inside = inside_transmitter(s);
-            const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
-                                   (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
-                                   (far_side ? static_cast<uint32_t>(kFarSidePhoton) : 0u) |
-                                   (reflected ? 0u : static_cast<uint32_t>(kFarSideOnly)) |
-                                   (after_glossy ? static_cast<uint32_t>(kAfterGlossy) : 0u);
-            Photon photon{s.position, -ray.direction, s.geometric_normal, caustic ? power * caustic_weight : power,
-                          flags, {}};
-            kept.set_shares(photon);
-            out.push_back(photon);
+            store(s, reflected, far_side, inside_transmitter(s));
             // An aimed photon goes on where this surface also passes light on sharply (glass with a clearcoat, a
             // mirror mixed with diffuse): every caustic photon an ordinary photon stores along its sharp chain is
             // one the balance heuristic shares with the aimed ones, so they must store it too. It stops at its

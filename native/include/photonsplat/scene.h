@@ -74,6 +74,9 @@ enum RayVisibility : uint32_t {
     kIndirectRays = 4u,  // everything else: camera paths after a mirror or glass, photon paths
     kAllRays = 7u,
 };
+// The surfaces photons are stored on: those bounces see, and those only the camera sees, which a photon passes
+// through after storing there (photons.cpp: the camera's paths on them gather what other surfaces send them).
+constexpr uint32_t kPhotonReceivers = kCameraRays | kIndirectRays;
 
 // A mesh in object space, as validated and kept by the scene. Only non-degenerate triangles are kept.
 // Positions (and the bounds) are kept relative to `centre`: 0 for ordinary meshes (their coordinates are kept

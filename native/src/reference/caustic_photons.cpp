@@ -25,6 +25,7 @@ namespace ps {
 namespace {
 constexpr uint64_t kChunk = 4096;           // photons per task; chunks are concatenated in order
 constexpr int64_t kMaxCellsPerAxis = (int64_t(1) << 21) - 1;
+constexpr int kMaxPassedSurfaces = 64;  // surfaces no bounce sees that one photon passes through
 constexpr float kCosNormalTolerance = 0.5f;  // τ = 60°, render()'s default
 }  // namespace
 
@@ -75,10 +76,27 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
             glm::vec3 power = emitted.power / static_cast<float>(probability);
             Ray ray{emitted.origin, emitted.direction};
             bool direct = true;
+            int crossings = 0;  // surfaces no bounce sees, passed through
             for (int bounce = 0; bounce <= max_specular_bounces; ++bounce) {
                 Hit hit;
-                if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit)) break;
+                if (!tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kPhotonReceivers))
+                    break;
                 const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
+                // A surface no bounce sees (Ray Visibility): as Photon Splat's photons do (photons.cpp), stored
+                // where the camera sees it, then passed through; straight from the light, a shadow stops it.
+                const uint32_t seen_by = scene.instances()[hit.instance].visibility;
+                if (!(seen_by & kIndirectRays)) {
+                    if (direct && (seen_by & kShadowRays)) break;
+                    if (!direct && (seen_by & kCameraRays) && bsdf_has(shade(scene, s, -ray.direction), LobeSet::all))
+                        per_chunk[chunk].push_back(Photon{
+                            s.position, -ray.direction, s.geometric_normal, power,
+                            kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u), {}});
+                    if (++crossings > kMaxPassedSurfaces) break;
+                    const glm::vec3 beyond = -s.geometric_normal;  // geometric_normal faces the ray
+                    ray.origin = offset_ray_origin(s.position, beyond, s.rounding_scale);
+                    --bounce;  // not a bounce
+                    continue;
+                }
                 if (bounce == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface

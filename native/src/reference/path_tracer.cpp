@@ -222,7 +222,10 @@ glm::vec3 trace_reference_path(const PathTracerContext& c, Ray ray, Rng& rng, Pa
     for (int depth = 0;; ++depth) {
         Hit hit;
         ++counters.rays;
-        const bool found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit);
+        // Object ray visibility as Cycles keeps it: the camera's ray (transparency crossed keeps it one) meets what
+        // is visible to the camera, every later ray what is visible to diffuse, glossy or transmission rays.
+        const bool found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit,
+                                            camera_ray ? kCameraRays : kIndirectRays);
         // Scene lights are not in the BVH: test them against the ray. Camera rays do not see them (render()).
         // A light counts where it lies on this ray's own segment, from ray.origin to the hit. Its density for the
         // MIS weight is the one next-event estimation drew it with, from the last scatter: after transparency
