@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 import photonsplat
-from blender_helpers import render_pixels, use_cycles, use_photonsplat
+from blender_helpers import render_pixels, single_node_material, use_cycles, use_photonsplat
 
 SIZE = 32
 SAMPLES = 1024
@@ -57,11 +57,7 @@ def floor_and_three_cubes(scene):
     shadow."""
     scene.world = bpy.data.worlds.new("Dim")
     scene.world.color = (0.05, 0.05, 0.05)
-    grey = bpy.data.materials.new("Grey")
-    grey.diffuse_color = (0.7, 0.7, 0.7, 1.0)
-    grey.use_nodes = True
-    grey.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.7, 0.7, 0.7, 1.0)
-    grey.node_tree.nodes["Principled BSDF"].inputs["Specular"].default_value = 0.0
+    grey = single_node_material("Grey", "ShaderNodeBsdfDiffuse", Color=(0.7, 0.7, 0.7, 1.0))
     bpy.ops.mesh.primitive_plane_add(size=8.0)
     bpy.context.active_object.data.materials.append(grey)
     cubes = {}
