@@ -148,7 +148,7 @@ glm::vec3 near_mirror_light(const DirectLightContext& c, const Bsdf& b, const gl
             if (!(glm::dot(in.wi, b.ng) > 0.0f) || is_black(in.value)) continue;
             const Cycles3MirrorValue v = cycles3_multiscatter_mirror_eval(alpha, b.n, in.wi, b.wo);
             if (!(v.f > 0.0f)) continue;
-            const float w = delta || !sources.found_by_bsdf_rays(l)
+            const float w = !sources.mis_with_bsdf_rays(l)
                                 ? 1.0f
                                 : power_heuristic(sources.cycles_lamp_pdf(l, x, in.wi), v.pdf);
             const float scale = v.f * glm::dot(in.wi, b.n) * w;
@@ -215,7 +215,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
         // A light with Cast Shadow off takes no shadow ray (Light::cast_shadow): every sample counts.
         const bool shadowed = sources.casts_shadow(l);
         // Multiple Importance off: the BSDF directions below never meet the light, so its samples take weight 1.
-        const bool light_mis = !delta && sources.found_by_bsdf_rays(l);
+        const bool light_mis = sources.mis_with_bsdf_rays(l);
         const auto trace_pending = [&] {
             if (!shadowed) {
                 for (int j = 0; j < pending; ++j) light_sum += value[j] * scale[j];
@@ -311,7 +311,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             found = tracer.intersect(ray, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays);
             for (size_t l = 0; l < sources.size() && mis; ++l) {
                 const Light* light = sources.light(l);
-                if (!light || sources.is_delta(l) || !sources.found_by_bsdf_rays(l)) continue;
+                if (!light || !sources.mis_with_bsdf_rays(l)) continue;
                 const LightHit h = intersect_light(*light, x, bs.direction);
                 if (!h.hit || !(h.distance >= travelled) || (found && !(h.distance < travelled + hit.t))) continue;
                 const float p_light = cycles_weights ? sources.cycles_mis_density(l, x, bs.direction, h.pdf) : h.pdf;

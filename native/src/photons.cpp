@@ -34,8 +34,14 @@ namespace {
 // order: the photon map is then the same whatever the number of threads.
 constexpr uint64_t kChunk = 4096;
 
-// Surfaces no bounce sees that one photon path passes through (stacked ones beyond this end it).
-constexpr int kMaxPassedSurfaces = 64;
+// Surfaces one ray passes through: a photon's through surfaces no bounce sees, a shadowless light's line of
+// copies (LineRole). Stacked ones beyond this end it.
+constexpr int kMaxCrossedSurfaces = 64;
+
+// The origin of a ray going on along its way through the surface at s (s.geometric_normal faces the ray).
+glm::vec3 beyond_surface(const SurfacePoint& s) {
+    return offset_ray_origin(s.position, -s.geometric_normal, s.rounding_scale);
+}
 
 // Sources are chosen in proportion to the luminance of their flux, so photons carry near-equal power.
 struct SourceChoice {
@@ -185,9 +191,15 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
     bool direct = true;
     bool after_glossy = false;  // kAfterGlossy
     float caustic_weight = 1.0f;
-    // Stores the photon where it arrives at s (reflected: s has parts a view sample on its own side gathers by;
-    // far_side: a caustic one kept for the far side of a translucent s; inside: s lies within a transmitter).
-    const auto store = [&](const SurfacePoint& s, bool reflected, bool far_side, bool inside) {
+    // Stores the photon where view samples receive it at s: on a surface that reflects it, and, where it is a
+    // caustic one, on a translucent surface, whose far side gathers those (view_samples.h). b: s's closures, or
+    // null for a Lambert-only surface.
+    const auto store = [&](const SurfacePoint& s, const Bsdf* b) {
+        const bool reflected = b == nullptr || bsdf_has(*b, LobeSet::reflection);
+        const bool far_side = b != nullptr && only_specular_so_far && s.material->translucent &&
+                              translucent_albedo(*b) != glm::vec3(0.0f);
+        if (!reflected && !far_side) return;
+        const bool inside = b != nullptr && inside_transmitter(s);
         const bool caustic = only_specular_so_far;
         const uint32_t flags = (caustic ? static_cast<uint32_t>(kCaustic) : 0u) |
                                (inside ? static_cast<uint32_t>(kInsidePhoton) : 0u) |
@@ -208,25 +220,20 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // beyond it, but its own paths see the rest: the camera finds there the light other surfaces send it. So
         // the photon is stored there (where the camera can see it) and goes on through it unchanged. Straight from
         // the light it is what a shadow ray meets: where the surface casts shadows, nothing lit behind it.
-        const uint32_t seen_by = scene.instances()[hit.instance].visibility;
-        if (!(seen_by & kIndirectRays)) {
-            if (direct && (seen_by & kShadowRays)) return;
+        const uint32_t visible_to = scene.instances()[hit.instance].visibility;
+        if (!(visible_to & kIndirectRays)) {
+            if (direct && (visible_to & kShadowRays)) return;
             const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
-            if (!direct && (seen_by & kCameraRays) && (s.material->has_delta || s.material->has_lobes)) {
+            if (!direct && (visible_to & kCameraRays) && (s.material->has_delta || s.material->has_lobes)) {
                 if (s.material->lambert_only) {
-                    store(s, true, false, false);
+                    store(s, nullptr);
                 } else {
                     const Bsdf b = shade(scene, s, -ray.direction);
-                    const bool reflected = bsdf_has(b, LobeSet::reflection);
-                    const bool far_side = only_specular_so_far && s.material->translucent &&
-                                          translucent_albedo(b) != glm::vec3(0.0f);
-                    if (reflected || far_side) store(s, reflected, far_side, inside_transmitter(s));
+                    store(s, &b);
                 }
             }
-            if (++crossings > kMaxPassedSurfaces) return;
-            const glm::vec3 beyond = glm::dot(ray.direction, s.geometric_normal) > 0.0f ? s.geometric_normal
-                                                                                       : -s.geometric_normal;
-            ray.origin = offset_ray_origin(s.position, beyond, s.rounding_scale);
+            if (++crossings > kMaxCrossedSurfaces) return;
+            ray.origin = beyond_surface(s);
             --vertex;  // not a bounce
             continue;
         }
@@ -239,7 +246,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         if (m.lambert_only) {
             if (lobes_to_copy) return;
             // Most surfaces: stored, then a cosine-weighted bounce with roulette on the albedo (no Bsdf to build).
-            if (!direct) store(s, true, false, false);
+            if (!direct) store(s, nullptr);
             kept.scatter(1.0f, glm::vec3(1.0f));
             if (weighting.aimed) return;  // an aimed photon stands for caustics only
             only_specular_so_far = false;
@@ -260,12 +267,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         // GGX surface passes it on as Cycles' evaluation towards a light sample weighs it (closures.h). Multiscatter
         // GGX glass takes Cycles' blend of that and its walk below (weight_blended_towards_light).
         if (direct && !bsdf_has_multi_ggx_glass(b)) b.sampled_estimate = scene.multiscatter_light_estimate();
-        // Stored where view samples receive it: on a surface that reflects it, and, where it is a caustic one, on a
-        // translucent surface, whose far side gathers those (view_samples.h).
-        const bool reflected = bsdf_has(b, LobeSet::reflection);
-        const bool far_side = only_specular_so_far && m.translucent && translucent_albedo(b) != glm::vec3(0.0f);
-        if (!direct && (reflected || far_side)) {
-            store(s, reflected, far_side, inside_transmitter(s));
+        if (!direct) {
+            store(s, &b);
             // An aimed photon goes on where this surface also passes light on sharply (glass with a clearcoat, a
             // mirror mixed with diffuse): every caustic photon an ordinary photon stores along its sharp chain is
             // one the balance heuristic shares with the aimed ones, so they must store it too. It stops at its
@@ -341,19 +344,15 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
 }
 
 // The copies of a shadowless light's photon (LineRole): one from each surface beyond the first along its emission
-// ray, up to kMaxLineSurfaces of them.
-constexpr int kMaxLineSurfaces = 64;
+// ray, up to kMaxCrossedSurfaces of them.
 void trace_line_copies(const Scene& scene, const EmissionSample& emitted, const PhotonSource& source,
                        const glm::vec3& power, const PathOptions& options, Rng& rng, std::vector<Photon>& out) {
     const RayTracer& tracer = scene.ray_tracer();
     Ray line{emitted.origin, emitted.direction};
     Hit hit;
     if (!tracer.intersect(line, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
-    for (int k = 0; k < kMaxLineSurfaces; ++k) {
-        const SurfacePoint s = surface_at(scene, line, hit, ShaderRay::photon);
-        const glm::vec3 beyond = glm::dot(line.direction, s.geometric_normal) > 0.0f ? s.geometric_normal
-                                                                                     : -s.geometric_normal;
-        line.origin = offset_ray_origin(s.position, beyond, s.rounding_scale);
+    for (int k = 0; k < kMaxCrossedSurfaces; ++k) {
+        line.origin = beyond_surface(surface_at(scene, line, hit, ShaderRay::photon));
         if (!tracer.intersect(line, 0.0f, std::numeric_limits<float>::infinity(), hit, kIndirectRays)) return;
         EmissionSample copy = emitted;
         copy.origin = line.origin;

@@ -207,7 +207,7 @@ void trace_camera_path(PixelPaths& p, CameraPath path) {
             for (size_t l = 0; l < p.sources->size(); ++l) {
                 const Light* light = p.sources->light(l);
                 // Multiple Importance off: Cycles' rays after a bounce never meet the light (Light::multiple_importance).
-                if (light == nullptr || p.sources->is_delta(l) || !p.sources->found_by_bsdf_rays(l)) continue;
+                if (light == nullptr || !p.sources->mis_with_bsdf_rays(l)) continue;
                 const LightHit h = intersect_light(*light, ray.origin, ray.direction);
                 if (!h.hit || (found && !(h.distance < hit.t))) continue;
                 const float w =

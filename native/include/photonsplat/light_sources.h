@@ -33,6 +33,9 @@ public:
     // Whether rays other than the camera's (BSDF rays, photon-side mirror chains) meet source i: false for a light
     // with Multiple Importance off (Light::multiple_importance), whose light samples then take weight 1.
     bool found_by_bsdf_rays(size_t i) const { return sources_[i].light == nullptr || sources_[i].light->multiple_importance; }
+    // Whether a BSDF ray can meet source i, so that its light samples share with such rays by MIS: it has a size
+    // (not is_delta) and Multiple Importance on. Where not, its light samples take weight 1.
+    bool mis_with_bsdf_rays(size_t i) const { return !is_delta(i) && found_by_bsdf_rays(i); }
     // Whether source i's light samples take a shadow ray: false for a light with Cast Shadow off.
     bool casts_shadow(size_t i) const { return sources_[i].light == nullptr || sources_[i].light->cast_shadow; }
 

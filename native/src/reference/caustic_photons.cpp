@@ -84,10 +84,11 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
                 // A surface no bounce sees (Ray Visibility): as Photon Splat's photons do (photons.cpp), stored
                 // where the camera sees it, then passed through; straight from the light, a shadow stops it.
-                const uint32_t seen_by = scene.instances()[hit.instance].visibility;
-                if (!(seen_by & kIndirectRays)) {
-                    if (direct && (seen_by & kShadowRays)) break;
-                    if (!direct && (seen_by & kCameraRays) && bsdf_has(shade(scene, s, -ray.direction), LobeSet::all))
+                const uint32_t visible_to = scene.instances()[hit.instance].visibility;
+                if (!(visible_to & kIndirectRays)) {
+                    if (direct && (visible_to & kShadowRays)) break;
+                    if (!direct && (visible_to & kCameraRays) &&
+                        bsdf_has(shade(scene, s, -ray.direction), LobeSet::all))
                         per_chunk[chunk].push_back(Photon{
                             s.position, -ray.direction, s.geometric_normal, power,
                             kCaustic | (inside_transmitter(s) ? kInsidePhoton : 0u), {}});

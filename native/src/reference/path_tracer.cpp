@@ -178,7 +178,7 @@ glm::vec3 sample_lights(const PathTracerContext& c, const Bsdf& b, const Surface
         if (t == glm::vec3(0.0f)) continue;
         // Multiple Importance off: no BSDF ray meets the light (below), so its samples keep their full value.
         float w = 1.0f;
-        if (!c.sources.is_delta(l) && c.sources.found_by_bsdf_rays(l)) {
+        if (c.sources.mis_with_bsdf_rays(l)) {
             const float p_light = cycles_weights ? c.sources.cycles_mis_density(l, s.position, in.wi, in.pdf) : in.pdf;
             const float p_bsdf = glass != nullptr ? glass_reported_pdf(b, *glass, in.wi) : bsdf_sample_pdf(b, in.wi);
             w = power_heuristic(p_light, p_bsdf);
