@@ -23,6 +23,7 @@
 
 #include "photonsplat/camera.h"
 #include "photonsplat/errors.h"
+#include "photonsplat/photon_shading_normals.h"
 #include "photonsplat/validation.h"
 #include "photonsplat/view_samples.h"
 
@@ -287,8 +288,10 @@ void build_cones(const ViewSamples& samples, ClusterHierarchy& h) {
             unit.clear();
             for (uint32_t k = node.sample_begin; k != node.sample_end; ++k) {
                 const ViewSample& s = samples.samples[h.sample_order[k]];
-                // Trivial accepts skip the per-sample test: only for samples it could not refuse by side either.
-                if (s.flags & (kGlossy | kInsideSample)) flags &= uint8_t(~kNodeDiffuseOnly);
+                // Trivial accepts skip the per-sample test: only for samples it could not refuse by side either,
+                // and whose f is one number for every photon (no shading normal leaning off the triangle).
+                if ((s.flags & (kGlossy | kInsideSample)) || shading_normal_tilted(s.shading_normal, s.normal))
+                    flags &= uint8_t(~kNodeDiffuseOnly);
                 const glm::dvec3 n(s.normal);
                 const double length = glm::length(n);
                 const bool unit_normal = std::isfinite(length) && std::fabs(length - 1.0) <= kUnitTolerance;

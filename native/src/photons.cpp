@@ -16,6 +16,7 @@
 #include "photonsplat/emission_guide.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/materials.h"
+#include "photonsplat/photon_shading_normals.h"
 #include "photonsplat/shading.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
@@ -259,6 +260,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             const float v1 = rng.uniform(), v2 = rng.uniform();
             const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
             if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below
+            power *= shading_normal_ratios(s, -ray.direction, direction);
             ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
             continue;
         }
@@ -335,6 +337,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
         power *= step_weight * ((seen_from_exit ? 1.0f : photon_units_across(b, step)) / keep);
+        if (step.kind != ScatterKind::transparent) power *= shading_normal_ratios(s, -ray.direction, step.direction);
         if (step.kind == ScatterKind::lobes && !(glm::dot(step.direction, step.transmitted ? -s.geometric_normal
                                                                                             : s.geometric_normal) > 0.0f))
             return;

@@ -486,6 +486,32 @@ TEST(SplatClusterCone, GlossySamplesAreNeverAccepted) {
     EXPECT_EQ(counter(all.cone, "accepted_samples"), 0.0);
 }
 
+// A smooth-shaded sample takes each photon times (n_s·ω_i)/(n_g·ω_i) of the photon's own triangle
+// (photon_shading_normals.h), which a trivial accept's one sum for all photons cannot give: its nodes are never
+// accepted, and the splat is still brute's.
+TEST(SplatClusterCone, SmoothShadedSamplesAreNeverAccepted) {
+    std::mt19937 rng(17);
+    SyntheticOptions o = cone_scene_options();
+    o.axis_aligned = true;
+    o.specular_fraction = 0.0;
+    const FromAbove f = splat_from_above(o, rng, 2000, 0.3f, 1.0f, "flat-shaded");
+    EXPECT_GT(counter(f.out.cone, "node_accepts"), 0.0);
+    ViewSamples smooth = f.vs;
+    std::uniform_real_distribution<float> lean(-0.3f, 0.3f);
+    for (ViewSample& s : smooth.samples)
+        s.shading_normal = glm::normalize(s.normal + glm::vec3(lean(rng), lean(rng), lean(rng)));
+    const Outcome out = compare(smooth, f.map, splat_params(1.0f, f.map), key_params(48, 40), "smooth-shaded");
+    EXPECT_EQ(counter(out.cone, "node_accepts"), 0.0);
+    // The ratios are in brute's sums: the same photons give another image.
+    RenderControl control;
+    Stats flat_stats, smooth_stats;
+    const std::vector<glm::vec3> flat = splat_brute(f.vs, f.map, splat_params(1.0f, f.map), control, flat_stats);
+    const std::vector<glm::vec3> leaning = splat_brute(smooth, f.map, splat_params(1.0f, f.map), control, smooth_stats);
+    size_t differing = 0;
+    for (size_t i = 0; i < flat.size(); ++i) differing += flat[i] != leaning[i] ? 1 : 0;
+    EXPECT_GT(differing, flat.size() / 2);
+}
+
 TEST(SplatClusterCone, PlaneDistanceTest) {
     for (bool aligned : {true, false}) {
         std::mt19937 rng(17);

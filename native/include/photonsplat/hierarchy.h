@@ -42,7 +42,8 @@ struct NormalCone {
 
 // Per-node flags (ClusterHierarchy::node_flags).
 enum ClusterNodeFlags : uint8_t {
-    kNodeDiffuseOnly = 1u,  // no sample has kGlossy (or a nonzero specular tint): the BRDF ignores directions
+    kNodeDiffuseOnly = 1u,  // no sample has kGlossy (or a nonzero specular tint) or a tilted shading normal
+                            // (photon_shading_normals.h): what a sample takes of a photon ignores its direction
     kNodeRegular = 2u,      // every sample has a finite position and a finite unit (±1e-4) geometric normal
 };
 

@@ -12,6 +12,7 @@
 #include <glm/vec4.hpp>
 
 #include "photonsplat/shading.h"
+#include "photonsplat/photon_shading_normals.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/view_samples.h"
 
@@ -113,11 +114,24 @@ inline double kernel_weight(const glm::vec3& d, const SplatParams& params) {
     return 2.0 * (1.0 - static_cast<double>(glm::dot(d, d)) / r2);
 }
 
-// f_r·Φ·w for one photon that passed photon_reaches_sample: what a sample accumulates (in double) before
-// finish_sample. `p` is the photon position relative to the samples' origin.
+// Whether the sample's f alone (sample_brdf) is what it takes from every photon: its shading normal is its
+// triangle's (photon_shading_normals.h). Else each photon also counts its arrival ratio, and the methods' shortcuts
+// for diffuse samples (one f for all ω_i: cone accepts, directional sums) do not apply to it.
+inline bool sample_shading_tilted(const ViewSample& s) { return shading_normal_tilted(s.shading_normal, s.normal); }
+
+// The share of a photon's flux that the sample responds to, beyond f: 1 unless the sample's shading normal is
+// tilted, else (n_s·ω_i) over the photon's own (n_g·ω_i), since its flux is per unit of its own triangle's area
+// (which may be a neighbour of the sample's, with another normal, on a low-poly mesh).
+inline double photon_arrival_share(const ViewSample& s, const Photon& photon) {
+    return sample_shading_tilted(s) ? double(photon_arrival_ratio(s.shading_normal, photon.normal, photon.wi)) : 1.0;
+}
+
+// f_r·Φ·w for one photon that passed photon_reaches_sample (f_r with its shading normal's arrival ratio): what a
+// sample accumulates (in double) before finish_sample. `p` is the photon position relative to the samples' origin.
 inline glm::dvec3 photon_reflected_flux(const ViewSample& s, const Lobe* lobes, const glm::vec3& p,
                                         const Photon& photon, const SplatParams& params) {
-    const glm::dvec3 f = sample_brdf(s, lobes, photon.wi, params.label_share) * glm::dvec3(photon.power);
+    const glm::dvec3 f = sample_brdf(s, lobes, photon.wi, params.label_share) * glm::dvec3(photon.power) *
+                         photon_arrival_share(s, photon);
     return params.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params);
 }
 

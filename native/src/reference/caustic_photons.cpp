@@ -13,6 +13,7 @@
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
 #include "photonsplat/materials.h"
+#include "photonsplat/photon_shading_normals.h"
 #include "photonsplat/ray_tracer.h"
 #include "photonsplat/render_control.h"
 #include "photonsplat/rng.h"
@@ -122,6 +123,8 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                 const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));
                 if (!(keep > 0.0f) || rng.uniform() >= keep) break;
                 power *= step_weight * (photon_units_across(b, step) / keep);  // Cycles' units beyond glass
+                if (step.kind != ScatterKind::transparent)
+                    power *= shading_normal_ratios(s, -ray.direction, step.direction);
                 const glm::vec3 side = step.transmitted ? -s.geometric_normal : s.geometric_normal;
                 ray = Ray{offset_ray_origin(s.position, side, s.rounding_scale), step.direction};
             }

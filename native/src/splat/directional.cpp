@@ -35,7 +35,9 @@
 //    Σ w·mean(Φ)·ωi, whose direction is the bin's flux-weighted mean direction ω̄.
 // 5. Shade. A sample x of facet f, in cut node n with parent P, is shaded from f's bins blended with P's:
 //      L(x) = finish_sample( (1 − β)·Σ_b [n_x·ω̄_b > 0]·f_r(x, ω̄_b)·F_b + β·(the same over P's bins) ),
-//    f_r = sample_brdf(x, ω̄_b), so glossy receivers see each bin from its mean direction. P's bins are the
+//    f_r = sample_brdf(x, ω̄_b) times, on a smooth-shaded or bump-mapped sample, its shading normal's arrival
+//    ratio for ω̄_b against its own triangle (photon_shading_normals.h; the exact methods take each photon's
+//    triangle), so glossy and smooth-shaded receivers see each bin from its mean direction. P's bins are the
 //    sample-weighted mean of the bins of the facets under P that face like f (axes within τ):
 //    Σ m_g·F_g / Σ m_g, re-binned by the world octant of each ω̄. That is P's estimate over its larger region
 //    on the scale of a single node (P's raw sum would count every child's disc), without the other wall of a
@@ -488,7 +490,8 @@ glm::dvec3 reflect_bins(const ViewSample& s, const Lobe* lobes, const ShadeBin* 
     glm::dvec3 sum(0.0);
     for (int b = 0; b < count; ++b)
         if (glm::dot(s.normal, bins[b].direction) > 0.0f)
-            sum += sample_brdf(s, lobes, bins[b].direction, share) * bins[b].flux;
+            sum += sample_brdf(s, lobes, bins[b].direction, share) * bins[b].flux *
+                   double(photon_arrival_ratio(s.shading_normal, s.normal, bins[b].direction));
     return sum;
 }
 
@@ -894,7 +897,8 @@ private:
                 if (!(h.mode & kHasBins)) continue;
                 const float t = glm::length(s.position - h.centroid) * h.inv_reach;
                 const float beta = h.mode & kHasParent ? float(kMaxParentBlend) * std::min(1.0f, t) : 0.0f;
-                const bool diffuse = !(s.flags & kGlossy);
+                // (A tilted shading normal weighs each bin by its direction: photon_shading_normals.h.)
+                const bool diffuse = !(s.flags & kGlossy) && !sample_shading_tilted(s);
                 evaluations += h.bins;
                 // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
                 if (diffuse && (h.mode & kSumsFaceAll)) {

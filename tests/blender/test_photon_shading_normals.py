@@ -1,0 +1,72 @@
+"""Photons on a smooth-shaded low-poly mesh, against Cycles (native/include/photonsplat/photon_shading_normals.h).
+
+Cycles shades a smooth mesh by its interpolated normal: a surface reflects ∫ f (n_s·ω_i) L_i dω_i. Photons measure
+light per unit of the triangle's area, (n_g·ω_i) L_i dω_i, so each photon a smooth-shaded view sample receives
+counts (n_s·ω_i)/(n_g·ω_i) of its flux. Without that, an 80-face smooth sphere lit only by light bounced off the
+floor came out 0.90 to 1.13 of Cycles in its blocks (a bias no radius removes)."""
+
+import bpy
+import mathutils
+import numpy as np
+
+from blender_helpers import render_pixels, use_cycles, use_photonsplat
+
+SIZE = 32
+BOUNCES = 2
+
+
+def diffuse_material(name, value):
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    diffuse = tree.nodes.new('ShaderNodeBsdfDiffuse')
+    diffuse.inputs['Color'].default_value = (value, value, value, 1.0)
+    tree.links.new(diffuse.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    return material
+
+
+def sphere_over_a_floor(scene):
+    """An 80-face ico sphere, smooth-shaded, over a white floor in a near-overhead sun: the sphere's lower half
+    sees the sun not at all, only the floor's bounce."""
+    scene.world = bpy.data.worlds.new("Black")
+    scene.world.color = (0.0, 0.0, 0.0)
+    bpy.ops.mesh.primitive_plane_add(size=20.0)
+    bpy.context.active_object.data.materials.append(diffuse_material("Floor", 0.9))
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1, radius=1.0, location=(0.0, 0.0, 1.3))
+    bpy.ops.object.shade_smooth()
+    bpy.context.active_object.data.materials.append(diffuse_material("Sphere", 0.7))
+    bpy.ops.object.light_add(type='SUN', location=(0.0, 0.0, 5.0))
+    sun = bpy.context.active_object
+    sun.data.energy = 5.0
+    sun.data.angle = 0.05
+    sun.rotation_euler = (0.3, 0.0, 0.0)
+    bpy.ops.object.camera_add(location=(0.0, -5.0, 0.6))
+    camera = bpy.context.active_object
+    camera.rotation_euler = (mathutils.Vector((0.0, 0.0, 1.0)) - camera.location).normalized().to_track_quat(
+        '-Z', 'Y').to_euler()
+    camera.data.lens = 70
+    scene.camera = camera
+    return scene
+
+
+def blocks(image, block=8):
+    h, w = image.shape[:2]
+    return image[..., :3].reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3, 4))
+
+
+def test_bounced_light_on_a_smooth_low_poly_sphere_as_cycles(empty_scene, tmp_path, core):
+    scene = sphere_over_a_floor(empty_scene)
+    use_cycles(scene, SIZE, BOUNCES, samples=1024)
+    scene.cycles.light_sampling_threshold = 0.0
+    scene.cycles.pixel_filter_type = 'BOX'
+    scene.cycles.filter_width = 1.0
+    cycles = np.flipud(render_pixels(tmp_path / "cycles.exr"))[..., :3]
+    use_photonsplat(scene, SIZE, 100_000, max_bounces=BOUNCES, iterations=64)
+    ours = np.flipud(render_pixels(tmp_path / "photonsplat.exr"))[..., :3]
+    ratios = blocks(ours) / blocks(cycles)
+    print(f"\nsmooth low-poly sphere, Photon Splat / Cycles: {ours.mean() / cycles.mean():.4f}; blocks\n"
+          f"{np.round(ratios, 3)}")
+    assert abs(ours.mean() / cycles.mean() - 1.0) < 0.02
+    # The kernel's own bias on the sphere's facets (its flat-shaded twin: 0.93-1.03) is inside this; the missing
+    # ratio was not (0.90 and 1.13).
+    assert np.all(np.abs(ratios - 1.0) < 0.07)
