@@ -212,7 +212,8 @@ glm::vec3 CausticPhotonMap::radiance(const ViewSample& s, const Lobe* lobes) con
 
 glm::vec3 CausticPhotonMap::transmitted_radiance(const ViewSample& s, const Bsdf& b) const {
     return gather(s, [&](const Photon& photon, const glm::vec3& p) {
-        const glm::dvec3 f = glm::dvec3(bsdf_eval(b, photon.wi, LobeSet::transmission)) * glm::dvec3(photon.power);
+        const glm::dvec3 f = glm::dvec3(bsdf_eval(b, photon.wi, LobeSet::transmission)) * glm::dvec3(photon.power) *
+                             photon_arrival_share(s, photon);  // s: the far side, its normals turned to the photons
         return params_.kernel == Kernel::uniform ? f : f * kernel_weight(s.position - p, params_);
     });
 }
