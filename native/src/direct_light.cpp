@@ -59,6 +59,8 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.n = s.shading_normal;
     b.ng = s.normal;
     b.wo = s.wo;
+    b.smooth_n = s.smooth_normal;
+    b.bump_shadowed = (s.flags & kBumpShadowed) != 0;
     b.lambert = s.albedo;
     // The splat's lobes and the narrow ones after them (view_samples.h): direct light takes them all.
     b.lobe_count = static_cast<int>(std::min<uint32_t>(uint32_t(s.lobe_count) + s.branched_lobes, kMaxLobes));
@@ -258,7 +260,7 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             const bool weighted = (mis || sources.is_world(l)) && !world;
             const glm::vec3 f = below      ? bsdf_eval_shading_side(b, in.wi, set, scene.multiscatter_light_estimate())
                                 : weighted ? bsdf_eval(b, in.wi, set, scene.multiscatter_light_estimate())
-                                           : (transmission ? glm::vec3(0.0f) : b.lambert * kInvPi);
+                                           : (transmission ? glm::vec3(0.0f) : b.lambert * (kInvPi * bump_shadowing_of(b, in.wi)));
             if (is_black(f)) continue;
             ++rays;
             // The BSDF takes `probes` directions against this light's n: the power heuristic over the counts.
@@ -351,7 +353,8 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
             glm::vec3 lobes_weight = bs.weight;
             if (!transmission) {
                 const float cos_n = glm::dot(bs.direction, b.n);
-                if (cos_n > 0.0f) lobes_weight -= b.lambert * (kInvPi * cos_n / bs.pdf);
+                if (cos_n > 0.0f)
+                    lobes_weight -= b.lambert * (kInvPi * bump_shadowing_of(b, bs.direction) * cos_n / bs.pdf);
                 lobes_weight = glm::max(lobes_weight, glm::vec3(0.0f));
             }
             for (size_t l = 0; l < sources.size(); ++l)

@@ -290,7 +290,8 @@ void build_cones(const ViewSamples& samples, ClusterHierarchy& h) {
                 const ViewSample& s = samples.samples[h.sample_order[k]];
                 // Trivial accepts skip the per-sample test: only for samples it could not refuse by side either,
                 // and whose f is one number for every photon (no shading normal leaning off the triangle).
-                if ((s.flags & (kGlossy | kInsideSample)) || shading_normal_tilted(s.shading_normal, s.normal))
+                if ((s.flags & (kGlossy | kInsideSample | kBumpShadowed)) ||
+                    shading_normal_tilted(s.shading_normal, s.normal))
                     flags &= uint8_t(~kNodeDiffuseOnly);
                 const glm::dvec3 n(s.normal);
                 const double length = glm::length(n);

@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/material_program.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/scattering.h"
@@ -24,14 +25,18 @@ constexpr float kMinShadingCosine = 1e-3f;
 
 bool is_zero(const glm::vec3& v) { return v.x <= 0.0f && v.y <= 0.0f && v.z <= 0.0f; }
 
-// Reflection-side f of the Lambert sum and the lobes; wi on wo's side of the geometric normal.
+// Reflection-side f of the Lambert sum and the lobes; wi on wo's side of the geometric normal. The diffuse parts
+// (takes_bump_shadowing) are multiplied by `diffuse_term`.
 glm::vec3 reflection_value(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n,
                            const glm::vec3& wi, const glm::vec3& wo,
-                           MultiScatterEstimate estimate = MultiScatterEstimate::walk) {
-    glm::vec3 f = glm::dot(wi, n) > 0.0f ? lambert * kInvPi : glm::vec3(0.0f);
-    for (int k = 0; k < count; ++k)
-        if (!is_transmission(lobes[k])) f += lobe_eval(lobes[k], n, wi, wo, estimate).f;
-    return f;
+                           MultiScatterEstimate estimate = MultiScatterEstimate::walk, float diffuse_term = 1.0f) {
+    glm::vec3 diffuse = glm::dot(wi, n) > 0.0f ? lambert * kInvPi : glm::vec3(0.0f);
+    glm::vec3 f(0.0f);
+    for (int k = 0; k < count; ++k) {
+        if (is_transmission(lobes[k])) continue;
+        (takes_bump_shadowing(lobes[k]) ? diffuse : f) += lobe_eval(lobes[k], n, wi, wo, estimate).f;
+    }
+    return f + diffuse * diffuse_term;
 }
 
 bool in_set(const Lobe& l, LobeSet set) {
@@ -179,6 +184,8 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
     b.wo = wo;
     b.n = surface.shading_normal;
     if (m.directional && !(glm::dot(b.n, wo) > kMinShadingCosine)) b.n = b.ng;
+    b.smooth_n = surface.smooth_normal;
+    b.bump_shadowed = bump_shadowed(b.smooth_n, b.n);
     if (m.holdout) return b;  // absorbs everything
 
     // The view-dependent factors, once per hit (Cycles evaluates Fresnel and Layer Weight at the shading point).
@@ -298,16 +305,37 @@ bool is_diffuse_reflection(const Lobe& l) {
            l.kind == ClosureKind::velvet;
 }
 
+bool takes_bump_shadowing(const Lobe& l) {
+    return l.kind == ClosureKind::diffuse || l.kind == ClosureKind::principled_diffuse || l.kind == ClosureKind::sheen ||
+           l.kind == ClosureKind::translucent;
+}
+
+float bump_shadowing_of(const Bsdf& b, const glm::vec3& wi) {
+    return b.bump_shadowed ? bump_shadowing_term(b.smooth_n, b.n, wi) : 1.0f;
+}
+
+void take_bump_shadowing(Bsdf& b, const glm::vec3& wi) {
+    if (!b.bump_shadowed) return;
+    const float term = bump_shadowing_term(b.smooth_n, b.n, wi);
+    b.lambert *= term;
+    for (int k = 0; k < b.lobe_count; ++k)
+        if (takes_bump_shadowing(b.lobes[k])) b.lobes[k].weight *= term;
+    b.bump_shadowed = false;
+}
+
 namespace {
 
 // The set's parts for wi on the reflection side (`above`) or the transmission side of the surface.
 glm::vec3 eval_on_side(const Bsdf& b, const glm::vec3& wi, LobeSet set, MultiScatterEstimate estimate, bool above) {
     if (above && set == LobeSet::transmission) return glm::vec3(0.0f);
     if (!above && set == LobeSet::reflection) return glm::vec3(0.0f);
-    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate);
+    const float diffuse_term = bump_shadowing_of(b, wi);
+    if (above) return reflection_value(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, estimate, diffuse_term);
     glm::vec3 f(0.0f);
     for (int k = 0; k < b.lobe_count; ++k)
-        if (is_transmission(b.lobes[k])) f += lobe_eval(b.lobes[k], b.n, wi, b.wo, estimate).f;
+        if (is_transmission(b.lobes[k]))
+            f += lobe_eval(b.lobes[k], b.n, wi, b.wo, estimate).f *
+                 (takes_bump_shadowing(b.lobes[k]) ? diffuse_term : 1.0f);
     return f;
 }
 
@@ -357,12 +385,12 @@ float part_weight(const Lobe& lobe, const glm::vec3& n, const glm::vec3& wo, flo
 }
 
 LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, const glm::vec3& n, const glm::vec3& wi,
-                     const glm::vec3& wo, float floor, bool reflection_side) {
+                     const glm::vec3& wo, float floor, bool reflection_side, float diffuse_term) {
     LabelSums sums;
     const float cos_i = glm::dot(wi, n);
     if (reflection_side && cos_i > 0.0f && !is_zero(lambert)) {
         const float w = selection_weight(lambert, floor) * cos_i * kInvPi;
-        sums.add(lambert * kInvPi, w, true, w);
+        sums.add(lambert * (kInvPi * diffuse_term), w, true, w);
     }
     for (int k = 0; k < count; ++k) {
         if (is_transmission(lobes[k]) == reflection_side) continue;
@@ -372,7 +400,8 @@ LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, con
         const float drawn = lobes[k].distribution != Distribution::gtr1 ? v.pdf
                             : clearcoat_branches(lobes[k])         ? 0.0f
                                                                    : lobe_sampler_pdf(lobes[k], n, wi, wo);
-        sums.add(v.f, w * v.pdf, labelled_diffuse(lobes[k]), w * drawn);
+        sums.add(v.f * (takes_bump_shadowing(lobes[k]) ? diffuse_term : 1.0f), w * v.pdf, labelled_diffuse(lobes[k]),
+                 w * drawn);
     }
     return sums;
 }
@@ -380,11 +409,13 @@ LabelSums label_sums(const glm::vec3& lambert, const Lobe* lobes, int count, con
 }  // namespace
 
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
-                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor) {
+                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor,
+                               float diffuse_term) {
     bool clearcoat = false;
     for (int k = 0; k < lobe_count; ++k) clearcoat = clearcoat || lobes[k].distribution == Distribution::gtr1;
-    if (share == LabelShare::whole && !clearcoat) return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
-    const LabelSums sums = label_sums(lambert, lobes, lobe_count, n, wi, wo, selection_floor, true);
+    if (share == LabelShare::whole && !clearcoat)
+        return reflection_value(lambert, lobes, lobe_count, n, wi, wo, MultiScatterEstimate::walk, diffuse_term);
+    const LabelSums sums = label_sums(lambert, lobes, lobe_count, n, wi, wo, selection_floor, true, diffuse_term);
     if (!(sums.picked > 0.0f)) return share == LabelShare::diffuse ? glm::vec3(0.0f) : sums.f;
     // Cycles' camera path draws wi with density Σ w_j p_j^drawn and weighs it by f / Σ w_j p_j^reported: it converges
     // to f Σ w p^drawn / Σ w p^reported, which is f but where a clearcoat's two densities differ (bsdf_has_clearcoat).
@@ -417,7 +448,8 @@ BsdfSample sample_clearcoat_branch(const Bsdf& b, float u1, float u2) {
     const LobeSample s = lobe_sample(b.lobes[clearcoat], b.n, b.wo, u1, u2);
     if (!(s.pdf > 0.0f) || !(glm::dot(s.direction, b.ng) > 0.0f)) return out;
     const LabelSums sums =
-        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, s.direction, b.wo, b.selection_floor, true);
+        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, s.direction, b.wo, b.selection_floor, true,
+                   bump_shadowing_of(b, s.direction));
     if (!(sums.picked > 0.0f)) return out;
     const float w = part_weight(b.lobes[clearcoat], b.n, b.wo, b.selection_floor);
     const glm::vec3 weight = sums.f * (std::fabs(glm::dot(s.direction, b.n)) * w / sums.picked);
@@ -473,7 +505,8 @@ BsdfSample sample_narrow_lobe_branch(const Bsdf& b, float u0, float u1, float u2
 
 ScatterLabel scatter_label(const Bsdf& b, const glm::vec3& wi) {
     const LabelSums sums =
-        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, b.selection_floor, glm::dot(wi, b.ng) > 0.0f);
+        label_sums(b.lambert, b.lobes, b.lobe_count, b.n, wi, b.wo, b.selection_floor, glm::dot(wi, b.ng) > 0.0f,
+                   bump_shadowing_of(b, wi));
     ScatterLabel label;
     label.diffuse_probability = sums.diffuse_probability();
     for (int c = 0; c < 3; ++c)

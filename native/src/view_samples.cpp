@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/direct_light.h"
 #include "photonsplat/light_sources.h"
 #include "photonsplat/lights.h"
@@ -116,6 +117,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     sample.position = s.position;  // made camera-relative by the caller
     sample.normal = s.geometric_normal;
     sample.shading_normal = b ? b->n : s.shading_normal;
+    sample.smooth_normal = s.smooth_normal;
     sample.rounding_scale = s.rounding_scale;
     sample.wo = wo;
     sample.albedo = lambert;
@@ -142,6 +144,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     if (path.depth == 0 && b != nullptr) sample.selection_floor = defensive_floor(*b);
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
+    if (bump_shadowed(sample.smooth_normal, sample.shading_normal)) sample.flags |= kBumpShadowed;
     p.found.push_back(sample);
     if (p.found_terminator) {
         const TerminatorLift lift = terminator_lift(p.scene, s, s.geometric_normal);
@@ -163,6 +166,7 @@ void add_far_side_sample(PixelPaths& p, const CameraPath& path, const SurfacePoi
     sample.position = s.position;  // made camera-relative by the caller
     sample.normal = -b.ng;
     sample.shading_normal = -b.n;
+    sample.smooth_normal = -b.smooth_n;
     sample.rounding_scale = s.rounding_scale;
     sample.wo = b.wo - 2.0f * glm::dot(b.wo, b.ng) * b.ng;
     sample.albedo = translucent_albedo(b);
@@ -171,6 +175,7 @@ void add_far_side_sample(PixelPaths& p, const CameraPath& path, const SurfacePoi
     sample.flags = (path.depth > 0 ? kViaSpecular : 0u) | (std::min<uint32_t>(path.branch, 0xffu) << kBranchShift);
     // The other side of a transmitting surface is another place: inside where the path stands outside.
     if (!inside_transmitter(s)) sample.flags |= kInsideSample;
+    if (b.bump_shadowed) sample.flags |= kBumpShadowed;
     sample.depth = p.first.depth;
     p.found_far_side.push_back(sample);
 }

@@ -512,6 +512,32 @@ TEST(SplatClusterCone, SmoothShadedSamplesAreNeverAccepted) {
     EXPECT_GT(differing, flat.size() / 2);
 }
 
+// A bump-shadowed sample's diffuse f depends on each photon's direction (bump_shadowing.h), even where its shading
+// normal is its triangle's: never accepted, still brute's.
+TEST(SplatClusterCone, BumpShadowedSamplesAreNeverAccepted) {
+    std::mt19937 rng(23);
+    SyntheticOptions o = cone_scene_options();
+    o.axis_aligned = true;
+    o.specular_fraction = 0.0;
+    const FromAbove f = splat_from_above(o, rng, 2000, 0.3f, 1.0f, "flat-shaded");
+    EXPECT_GT(counter(f.out.cone, "node_accepts"), 0.0);
+    ViewSamples bumped = f.vs;
+    std::uniform_real_distribution<float> lean(-0.5f, 0.5f);
+    for (ViewSample& s : bumped.samples) {
+        s.smooth_normal = glm::normalize(s.normal + glm::vec3(lean(rng), lean(rng), 0.0f));
+        s.flags |= kBumpShadowed;
+    }
+    const Outcome out = compare(bumped, f.map, splat_params(1.0f, f.map), key_params(48, 40), "bump-shadowed");
+    EXPECT_EQ(counter(out.cone, "node_accepts"), 0.0);
+    RenderControl control;
+    Stats flat_stats, bumped_stats;
+    const std::vector<glm::vec3> flat = splat_brute(f.vs, f.map, splat_params(1.0f, f.map), control, flat_stats);
+    const std::vector<glm::vec3> shadowed = splat_brute(bumped, f.map, splat_params(1.0f, f.map), control, bumped_stats);
+    size_t darker = 0;
+    for (size_t i = 0; i < flat.size(); ++i) darker += shadowed[i].x < flat[i].x ? 1 : 0;
+    EXPECT_GT(darker, flat.size() / 4);
+}
+
 TEST(SplatClusterCone, PlaneDistanceTest) {
     for (bool aligned : {true, false}) {
         std::mt19937 rng(17);

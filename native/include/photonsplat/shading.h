@@ -26,6 +26,10 @@ struct Bsdf {
     glm::vec3 n{0.0f, 0.0f, 1.0f};   // shading normal, on the side of wo (geometric where shading faces away)
     glm::vec3 ng{0.0f, 0.0f, 1.0f};  // geometric normal on the side of wo
     glm::vec3 wo{0.0f, 0.0f, 1.0f};  // unit, away from the surface
+    // Cycles' sd->N (SurfacePoint::smooth_normal, on the side of wo): where n is not it (a Bump or Normal Map
+    // normal, a tilted one), the diffuse parts take bump_shadowing_term of the light's direction (bump_shadowing.h).
+    glm::vec3 smooth_n{0.0f, 0.0f, 1.0f};
+    bool bump_shadowed = false;
     glm::vec3 lambert{0.0f};         // Σ Lambert weights: f = lambert / π on wo's side
     Lobe lobes[kMaxLobes];
     int lobe_count = 0;
@@ -92,8 +96,10 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
 // part's f over Σ w_j p_j(wi), so the diffuse-labelled share of f(wi) is Σ_diffuse w_j p_j(wi) / Σ_all w_j p_j(wi).
 // selection_floor is Cycles' defensive floor at the camera's first hit (choose_defensively; 0 elsewhere).
 enum class LabelShare : uint8_t { whole, diffuse, other };
+// `diffuse_term`: what the diffuse parts are multiplied by for this wi (bump_shadowing_term, 1 where none applies).
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
-                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor);
+                               const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor,
+                               float diffuse_term = 1.0f);
 bool bsdf_has(const Bsdf& b, LobeSet set);  // the set has a part with weight here
 // How Cycles would label a photon's scatter from b (its wo, towards where the photon came from) into wi, sampled
 // among b's non-delta parts: the probability that its camera path, going the other way, labels it diffuse (the
@@ -164,6 +170,14 @@ Bsdf without_translucency(const Bsdf& b);
 // A part Cycles labels a diffuse reflection (Oren–Nayar, Principled diffuse, sheen, velvet), as against a microfacet
 // one: its Light Path flags and Caustics toggles go by that label.
 bool is_diffuse_reflection(const Lobe& lobe);
+// The parts Cycles gives its bump shadowing term (bump_shadowing.h): Lambert, and lobes of these kinds.
+bool takes_bump_shadowing(const Lobe& lobe);
+// What b's diffuse parts are multiplied by for light from wi: bump_shadowing_term where b is bump-shadowed, else 1.
+float bump_shadowing_of(const Bsdf& b, const glm::vec3& wi);
+// b seen by light arriving along wi (a photon's arrival, b.wo where b was shaded from the photon's side): its
+// diffuse parts' weights multiplied by their term for wi once, for every direction the light scatters on in, and
+// b no longer bump-shadowed.
+void take_bump_shadowing(Bsdf& b, const glm::vec3& wi);
 
 // What a path does next at this surface.
 enum class ScatterKind : uint8_t { none, lobes, mirror, refraction, transparent };

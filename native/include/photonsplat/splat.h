@@ -11,8 +11,9 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
-#include "photonsplat/shading.h"
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/photon_shading_normals.h"
+#include "photonsplat/shading.h"
 #include "photonsplat/photons.h"
 #include "photonsplat/view_samples.h"
 
@@ -99,11 +100,15 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
 // albedo/π, plus for kGlossy samples their reflection lobes (shading.h); `lobes` is ViewSamples::lobes.data().
 // `share`: all of it, or the share Cycles' camera paths label diffuse or not (LabelShare, for the Caustics
 // output: a Lambert-only sample is labelled diffuse whole).
+// A kBumpShadowed sample's diffuse parts take Cycles' bump shadowing term of ωi (bump_shadowing.h).
 inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi, LabelShare share) {
     constexpr double inv_pi = 0.318309886183790671538;
-    if (!(s.flags & kGlossy)) return share == LabelShare::other ? glm::dvec3(0.0) : glm::dvec3(s.albedo) * inv_pi;
+    const float diffuse_term =
+        s.flags & kBumpShadowed ? bump_shadowing_term(s.smooth_normal, s.shading_normal, wi) : 1.0f;
+    if (!(s.flags & kGlossy))
+        return share == LabelShare::other ? glm::dvec3(0.0) : glm::dvec3(s.albedo) * (inv_pi * diffuse_term);
     return glm::dvec3(bsdf_eval_reflection(s.albedo, lobes + s.lobe_begin, static_cast<int>(s.lobe_count),
-                                           s.shading_normal, wi, s.wo, share, s.selection_floor));
+                                           s.shading_normal, wi, s.wo, share, s.selection_floor, diffuse_term));
 }
 
 // The kernel relative to the uniform one, so that finish_sample's 1/(π r²) applies to both:
@@ -116,14 +121,19 @@ inline double kernel_weight(const glm::vec3& d, const SplatParams& params) {
 
 // Whether the sample's f alone (sample_brdf) is what it takes from every photon: its shading normal is its
 // triangle's (photon_shading_normals.h). Else each photon also counts its arrival ratio, and the methods' shortcuts
-// for diffuse samples (one f for all ω_i: cone accepts, directional sums) do not apply to it.
-inline bool sample_shading_tilted(const ViewSample& s) { return shading_normal_tilted(s.shading_normal, s.normal); }
+// for diffuse samples (one f for all ω_i: cone accepts, directional sums) do not apply to it; nor do they to a
+// bump-shadowed sample, whose diffuse f depends on ω_i.
+inline bool sample_shading_tilted(const ViewSample& s) {
+    return shading_normal_tilted(s.shading_normal, s.normal) || (s.flags & kBumpShadowed);
+}
 
 // The share of a photon's flux that the sample responds to, beyond f: 1 unless the sample's shading normal is
 // tilted, else (n_s·ω_i) over the photon's own (n_g·ω_i), since its flux is per unit of its own triangle's area
 // (which may be a neighbour of the sample's, with another normal, on a low-poly mesh).
 inline double photon_arrival_share(const ViewSample& s, const Photon& photon) {
-    return sample_shading_tilted(s) ? double(photon_arrival_ratio(s.shading_normal, photon.normal, photon.wi)) : 1.0;
+    return shading_normal_tilted(s.shading_normal, s.normal)
+               ? double(photon_arrival_ratio(s.shading_normal, photon.normal, photon.wi))
+               : 1.0;
 }
 
 // f_r·Φ·w for one photon that passed photon_reaches_sample (f_r with its shading normal's arrival ratio): what a

@@ -29,6 +29,9 @@ enum ViewSampleFlags : uint32_t {
     // diffuse part. The Caustics output holds its direct and indirect light whole.
     kCausticSample = 4u,
     kInsideSample = 8u, // on the back face of a transmitting surface (inside glass): receives kInsidePhoton photons only
+    // The shading normal is not the interpolated one (smooth_normal): its diffuse parts take Cycles' bump
+    // shadowing term of each photon's direction (bump_shadowing.h).
+    kBumpShadowed = 16u,
 };
 
 // Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
@@ -40,7 +43,8 @@ inline uint32_t branch_of(uint32_t flags) { return (flags & kBranchMask) >> kBra
 struct ViewSample {
     glm::vec3 position;        // RELATIVE TO ViewSamples::origin (camera-relative: keeps precision far from 0)
     glm::vec3 normal;          // geometric normal, flipped to face the arriving camera path
-    glm::vec3 shading_normal;  // interpolated normal, on the same side as `normal`
+    glm::vec3 shading_normal;  // the closures' normal (SurfacePoint::shading_normal), on the same side as `normal`
+    glm::vec3 smooth_normal;   // kBumpShadowed samples: the interpolated one (Cycles' sd->N), on the same side
     glm::vec3 wo;              // unit direction back along the camera path
     glm::vec3 albedo;          // Σ of the Lambert closures' weights: that part of the BRDF is albedo / π
     glm::vec3 throughput;      // product of specular weights along the camera path (1 for a direct hit); a pixel's

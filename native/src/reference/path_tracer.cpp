@@ -55,6 +55,7 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
     v.position = s.position - origin;
     v.normal = b.ng;
     v.shading_normal = b.n;
+    v.smooth_normal = b.smooth_n;
     v.rounding_scale = s.rounding_scale;
     v.wo = b.wo;
     v.throughput = throughput;
@@ -64,7 +65,8 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
     for (int k = 0; k < b.lobe_count; ++k)
         if (!is_transmission(b.lobes[k])) lobes[v.lobe_count++] = b.lobes[k];
     v.flags = (v.lobe_count > 0 ? kGlossy : 0u) |
-              (inside_transmitter(s) ? static_cast<uint32_t>(kInsideSample) : 0u);
+              (inside_transmitter(s) ? static_cast<uint32_t>(kInsideSample) : 0u) |
+              (b.bump_shadowed ? static_cast<uint32_t>(kBumpShadowed) : 0u);
     return v;
 }
 
