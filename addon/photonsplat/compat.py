@@ -93,6 +93,22 @@ def principled_input(role):
 GLOSSY_BSDF_IDNAME = "ShaderNodeBsdfAnisotropic" if VERSION >= (4, 0, 0) else "ShaderNodeBsdfGlossy"
 
 
+def bump_filter_width(node):
+    """A Bump node's filter width and a note, or None: how many ray differentials apart it samples its Height
+    (the core's bump offsets). Blender 3.x samples one whole differential away. 4.x gave the node a Filter Width
+    input (0.1 for a new node; files from before it load with 1, 3.x's step): Cycles compiles it as a constant of
+    the node (svm_node_bump_P_dx), so a link into it is not followed and the socket's own value stands."""
+    socket = node.inputs.get("Filter Width")
+    if socket is None:
+        return 1.0, None
+    width = float(socket.default_value)
+    if not math.isfinite(width) or width < 0.0:
+        return 0.0, f"Bump node's Filter Width {width} read as 0"
+    note = f"Bump node's Filter Width link not followed ({width:g} used, as Cycles does)" if socket.is_linked \
+        else None
+    return width, note
+
+
 # --- node groups ----------------------------------------------------------------------------------------------
 
 def new_group_socket(tree, in_out, socket_type, name):

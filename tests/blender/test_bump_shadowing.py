@@ -35,6 +35,6 @@ def test_a_bump_mapped_floor_as_cycles(empty_scene, tmp_path, core):
     for name, image in images.items():
         assert abs(image.mean() / cycles.mean() - 1.0) < 0.02, name
         # Without the term the floor's blocks reached 1.13 (reference) and 1.12 (Photon Splat) of Cycles 3.4, and
-        # the reference 1.15 of Cycles 4.5. Against 4.x the reference stays 0.97-1.06 with it: 4.x's Bump node weighs its
-        # offset by a Filter Width the core does not follow (3.4's offset, shader_program.py says so).
+        # the reference 1.15 of Cycles 4.5. Against 4.x the reference stays 0.975-1.064 with it, the Bump's Filter
+        # Width followed: 4.x's bump shadowing term is another one.
         assert np.all(np.abs(blocks(image) / blocks(cycles) - 1.0) < BLOCK_TOLERANCE), name

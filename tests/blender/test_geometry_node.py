@@ -14,6 +14,8 @@ from photonsplat.export import shader_program
 from photonsplat.export.shader_program import POINTINESS, RANDOM_PER_ISLAND
 from test_programs import _attribute_recording_core, _export, decode, diffuse_material, op_table  # noqa: F401
 
+UNIT_WIDTH = shader_program.float_bits(1.0)   # the geometry op's bump filter width param, at the point itself
+
 CUBE_CORNER = math.acos(-1.0 / math.sqrt(3.0)) / math.pi      # the three edges' mean against the corner normal
 
 
@@ -127,7 +129,7 @@ def test_only_linked_geometry_outputs_are_exported(empty_scene, op_table):  # no
     assert pointiness.shape == (8, 1) and pointiness[:, 0] == pytest.approx(CUBE_CORNER, abs=1e-6)
     (material,) = frame.scene.materials
     code = decode(material["program"], shader_program.op_table())
-    assert [c[1] for c in code if c[0] == "geometry"] == [[0, names.index(POINTINESS), -1]]
+    assert [c[1] for c in code if c[0] == "geometry"] == [[0, names.index(POINTINESS), -1, UNIT_WIDTH]]
 
     tree.links.new(geometry.outputs["Random Per Island"], shader.inputs["Roughness"])
     frame = _export(Core)
@@ -139,7 +141,7 @@ def test_only_linked_geometry_outputs_are_exported(empty_scene, op_table):  # no
     (material,) = frame.scene.materials
     code = decode(material["program"], shader_program.op_table())
     assert [c[1] for c in code if c[0] == "geometry"] == [
-        [0, names.index(POINTINESS), names.index(RANDOM_PER_ISLAND)]]
+        [0, names.index(POINTINESS), names.index(RANDOM_PER_ISLAND), UNIT_WIDTH]]
 
 
 def test_a_pointiness_program_renders(empty_scene, core):

@@ -355,11 +355,15 @@ def test_bump_compiles_its_height_three_times(empty_scene, op_table):
     spec, program, code = program_of(mat, op_table)
     check_encoding(program, op_table)
     assert names(code).count("noise_texture") == 3
-    assert sorted(params[0] for name, params, _, _ in code if name == "texture_coordinate") == [0, 1, 2]
+    # The offsets' length: a whole differential in 3.x, the node's Filter Width (0.1 for a new node) in 4.x.
+    width = shader_program.float_bits(0.1 if "Filter Width" in bump.inputs else 1.0)
+    unit = shader_program.float_bits(1.0)
+    coordinates = sorted((params[0], params[-1]) for name, params, _, _ in code if name == "texture_coordinate")
+    assert coordinates == [(0, unit), (1, width), (2, width)]
     (bump_op,) = [c for c in code if c[0] == "bump"]
     noise_facs = [outputs[0] for name, _, _, outputs in code if name == "noise_texture"]
     assert bump_op[2][2:5] == noise_facs                # height at the point, at dx, at dy
-    assert bump_op[1] == [0, 0]                          # not inverted, Normal unconnected
+    assert bump_op[1] == [0, 0, width]                   # not inverted, Normal unconnected, the filter width
     (output,) = program["outputs"]
     assert output["target"] == "normal" and output["register"] == bump_op[3][0]
 
@@ -690,7 +694,8 @@ def test_only_the_attributes_programs_read_are_exported(empty_scene):
     assert info["pass_index"] == 5 and 0.0 <= info["random"] <= 1.0 and len(info["color"]) == 4
     (material,) = frame.scene.materials
     code = decode(material["program"], shader_program.op_table())
-    assert [c[1] for c in code if c[0] == "attribute"] == [[0, frame.scene.attribute_names.index("Paint")]]
+    assert [c[1] for c in code if c[0] == "attribute"] == [
+        [0, frame.scene.attribute_names.index("Paint"), shader_program.float_bits(1.0)]]
 
 
 # --- rendering through the core ----------------------------------------------------------------------------------

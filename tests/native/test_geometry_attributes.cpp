@@ -79,7 +79,10 @@ ShaderProgram geometry_program(int pointiness_id, int island_id, int bump = 0) {
     const ShaderOpInfo& info = shader_op_info(ShaderOp::geometry);
     const int n_out = static_cast<int>(std::strlen(info.outputs));
     p.registers.assign(3, 0.0f);  // 0..2: the emission (pointiness, random, 0)
-    p.code = {static_cast<int32_t>(ShaderOp::geometry), 3, 0, n_out, bump, pointiness_id, island_id};
+    const float width = 1.0f;  // the bump offset's filter width, as a float's bits
+    int32_t width_bits;
+    std::memcpy(&width_bits, &width, sizeof width_bits);
+    p.code = {static_cast<int32_t>(ShaderOp::geometry), 4, 0, n_out, bump, pointiness_id, island_id, width_bits};
     for (int o = 0; o < n_out; ++o) p.code.push_back(o == 7 ? 0 : o == 8 ? 1 : -1);
     p.outputs.push_back({ProgramTarget::emission, 0, 0});
     return p;
@@ -138,8 +141,8 @@ TEST(GeometryAttributes, GeometryOpReadsPointinessAndIslandAttributes) {
     EXPECT_EQ(emission_seen(scene, 6.2f, -0.3f), glm::vec3(0.0f));
 }
 
-TEST(GeometryAttributes, GeometryOpTakesThreeParams) {
-    EXPECT_EQ(shader_op_info(ShaderOp::geometry).params, 3);
+TEST(GeometryAttributes, GeometryOpTakesFourParams) {
+    EXPECT_EQ(shader_op_info(ShaderOp::geometry).params, 4);
     ShaderProgram old;
     const ShaderOpInfo& info = shader_op_info(ShaderOp::geometry);
     const int n_out = static_cast<int>(std::strlen(info.outputs));

@@ -4,6 +4,7 @@
 // (test_texture_nodes.cpp, test_converter_nodes.cpp).
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -24,6 +25,14 @@
 using namespace ps;
 
 namespace {
+
+// The filter width param of an op that reads the shading point: a float's bits (OpArgs::param_float).
+int32_t width_bits(float width) {
+    int32_t bits;
+    std::memcpy(&bits, &width, sizeof bits);
+    return bits;
+}
+const int32_t kUnitWidth = width_bits(1.0f);  // Blender 3.x's bump offset: one whole differential
 
 // Writes programs the way the add-on's compiler does: registers for constants, one instruction per node.
 struct ProgramWriter {
@@ -173,7 +182,7 @@ TEST(ShaderProgram, ConstantInputsFoldIntoTheClosures) {
     ProgramWriter w;
     const auto rgb = w.op(ShaderOp::combine_xyz, {}, {w.constant(0.2f), w.constant(0.4f), w.constant(0.6f)});
     const auto grey = w.op(ShaderOp::color_to_float, {}, {rgb[0]});
-    w.op(ShaderOp::texture_coordinate, {0, -1}, {});  // read by nothing: dropped
+    w.op(ShaderOp::texture_coordinate, {0, -1, kUnitWidth}, {});  // read by nothing: dropped
     w.output(ProgramTarget::closure_color, 0, rgb[0]);
     w.output(ProgramTarget::closure_roughness, 0, grey[0]);
     Material m = diffuse_closures("folded");
@@ -192,7 +201,7 @@ TEST(ShaderProgram, CoordinatesAndAttributesAtTheHit) {
     const uint32_t colour_id = scene.attribute_id("Col");
     EXPECT_EQ(scene.attribute_id("Col"), colour_id);
     ProgramWriter uv_w;
-    const auto tc = uv_w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, true, false, false, false, false});
+    const auto tc = uv_w.op(ShaderOp::texture_coordinate, {0, -1, kUnitWidth}, {}, {false, false, true, false, false, false, false});
     uv_w.output(ProgramTarget::closure_color, 0, tc[2]);
     Material uv_m = diffuse_closures("uv");
     uv_m.program = uv_w.p;
@@ -201,14 +210,14 @@ TEST(ShaderProgram, CoordinatesAndAttributesAtTheHit) {
     ASSERT_TRUE(scene.materials()[uv_material].lambert_only);
 
     ProgramWriter gen_w;
-    const auto gen = gen_w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {true, false, false, false, false, false, false});
+    const auto gen = gen_w.op(ShaderOp::texture_coordinate, {0, -1, kUnitWidth}, {}, {true, false, false, false, false, false, false});
     gen_w.output(ProgramTarget::emission, 0, gen[0]);
     Material gen_m = diffuse_closures("generated");
     gen_m.program = gen_w.p;
     const uint32_t gen_material = scene.add_material(gen_m);
 
     ProgramWriter attr_w;
-    const auto attr = attr_w.op(ShaderOp::attribute, {0, static_cast<int>(colour_id)}, {});
+    const auto attr = attr_w.op(ShaderOp::attribute, {0, static_cast<int>(colour_id), kUnitWidth}, {});
     attr_w.output(ProgramTarget::closure_color, 0, attr[0]);
     attr_w.output(ProgramTarget::emission, 0, attr_w.op(ShaderOp::float_to_vector, {}, {attr[3]})[0]);
     Material attr_m = diffuse_closures("attribute");
@@ -271,10 +280,10 @@ TEST(ShaderProgram, BumpTiltsTheNormalAgainstTheHeightsGradient) {
     ProgramWriter w;
     std::vector<int> heights;
     for (int k = 0; k < 3; ++k) {
-        const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1}, {}, {false, false, false, true, false, false, false});
+        const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, kUnitWidth}, {}, {false, false, false, true, false, false, false});
         heights.push_back(w.op(ShaderOp::vector_to_float, {}, {tc[3]})[0]);
     }
-    const auto n = w.op(ShaderOp::bump, {0, 0},
+    const auto n = w.op(ShaderOp::bump, {0, 0, kUnitWidth},
                         {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2], w.vec(glm::vec3(0.0f))});
     w.output(ProgramTarget::normal, 0, n[0]);
     Material m = diffuse_closures("bumped");
@@ -288,6 +297,66 @@ TEST(ShaderProgram, BumpTiltsTheNormalAgainstTheHeightsGradient) {
     expect_vec_near(shade(scene, s, glm::vec3(0, 0, 1)).n, s.shading_normal, 1e-6f);
 }
 
+
+TEST(ShaderProgram, BumpSamplesItsHeightAFilterWidthOfDifferentialsAway) {
+    // Height = (x² + y²) / 3 in object space, distance 0.3, under an orthographic camera whose pixel is dP = 0.2
+    // across. Cycles moves the height's samples width × dP along its two orthonormals a, b about N = z
+    // (a = (1, −1, 0)/√2, b = N × a): a quadratic's difference over a step δ is ∇h·δ + |δ|²/3, so the gradient
+    // the Bump sees is ∇h + (width dP / 3)(a + b), with a + b = (√2, 0, 0). Blender 3.x's step is width 1; 4.x's
+    // Filter Width defaults to 0.1, which brings the normal near the height's true gradient.
+    const float dP = 0.2f, x = 0.1f, y = 0.2f;
+    for (const float width : {1.0f, 0.5f, 0.1f}) {
+        Scene scene;
+        ShaderCamera camera;
+        camera.orthographic = true;
+        camera.pixel_spread = dP;
+        scene.set_shader_camera(camera);
+        ProgramWriter w;
+        std::vector<int> heights;
+        for (int k = 0; k < 3; ++k) {
+            const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, width_bits(width)}, {},
+                                 {false, false, false, true, false, false, false});
+            const auto squares = w.op(ShaderOp::vector_math, {2}, {tc[3], tc[3], w.vec(glm::vec3(0.0f)), w.constant(1.0f)},
+                                      {true, false});
+            heights.push_back(w.op(ShaderOp::vector_to_float, {}, {squares[0]})[0]);
+        }
+        const auto n = w.op(ShaderOp::bump, {0, 0, width_bits(width)},
+                            {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2],
+                             w.vec(glm::vec3(0.0f))});
+        w.output(ProgramTarget::normal, 0, n[0]);
+        Material m = diffuse_closures("bumped");
+        m.program = w.p;
+        scene.add_instance(add_quad(scene, scene.add_material(m), scene.attribute_id("Col")), glm::mat4(1.0f));
+        const glm::vec3 seen_gradient =
+            glm::vec3(2.0f * x / 3.0f, 2.0f * y / 3.0f, 0.0f) + (width * dP / 3.0f) * glm::vec3(std::sqrt(2.0f), 0, 0);
+        SCOPED_TRACE(width);
+        expect_vec_near(hit_at(scene, x, y).shading_normal,
+                        glm::normalize(glm::vec3(0.0f, 0.0f, 1.0f) - 0.3f * seen_gradient), 1e-4f);
+    }
+}
+
+TEST(ShaderProgram, BumpOfFilterWidthZeroOrNotANumberKeepsItsNormal) {
+    // No step: the three heights are one, and the Bump hands its input normal on (Cycles' is_zero branch).
+    for (const float width : {0.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        Scene scene;
+        ProgramWriter w;
+        std::vector<int> heights;
+        for (int k = 0; k < 3; ++k) {
+            const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, width_bits(width)}, {},
+                                 {false, false, false, true, false, false, false});
+            heights.push_back(w.op(ShaderOp::vector_to_float, {}, {tc[3]})[0]);
+        }
+        const auto n = w.op(ShaderOp::bump, {0, 0, width_bits(width)},
+                            {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2],
+                             w.vec(glm::vec3(0.0f))});
+        w.output(ProgramTarget::normal, 0, n[0]);
+        Material m = diffuse_closures("bumped");
+        m.program = w.p;
+        scene.add_instance(add_quad(scene, scene.add_material(m), scene.attribute_id("Col")), glm::mat4(1.0f));
+        SCOPED_TRACE(width);
+        expect_vec_near(hit_at(scene, 0.1f, 0.2f).shading_normal, glm::vec3(0.0f, 0.0f, 1.0f), 1e-6f);
+    }
+}
 TEST(ShaderProgram, TangentSpaceNormalMapFollowsTheUvs) {
     Scene scene;
     ProgramWriter w;
@@ -328,7 +397,7 @@ TEST(ShaderProgram, TangentSpaceNormalMapReadsMikkTSpaceTangentsWhereGiven) {
 TEST(ShaderProgram, ProgrammedEmissionIsSeenAndSampledPerTriangle) {
     Scene scene;
     ProgramWriter w;
-    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, true, false, false, false, false});
+    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1, kUnitWidth}, {}, {false, false, true, false, false, false, false});
     w.output(ProgramTarget::emission, 0, tc[2]);
     Material m = diffuse_closures("lamp");
     m.program = w.p;
@@ -344,7 +413,7 @@ TEST(ShaderProgram, RenderedEmissionShowsWindowCoordinatesAndCameraDepth) {
     // each pixel's centre in [0, 1]² (window coordinates, y up) and the distance to the camera (4).
     Scene scene;
     ProgramWriter w;
-    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1}, {}, {false, false, false, false, false, true, false});
+    const auto tc = w.op(ShaderOp::texture_coordinate, {0, -1, kUnitWidth}, {}, {false, false, false, false, false, true, false});
     const auto cam = w.op(ShaderOp::camera_data, {}, {}, {false, true, false});
     const auto sep = w.op(ShaderOp::combine_xyz, {}, {tc[5], tc[5] + 1, cam[1]});
     w.output(ProgramTarget::emission, 0, sep[0]);
@@ -406,7 +475,7 @@ TEST(ShaderProgram, RepeatedRunsAtOnePointFollowTheSceneWhenItChanges) {
     // instance in between must not: the scene's revision is part of what the reuse compares.
     Scene scene;
     ProgramWriter w;
-    const auto geometry = w.op(ShaderOp::geometry, {0, -1, -1}, {}, {true, false, false, false, false, false, false, false, false});
+    const auto geometry = w.op(ShaderOp::geometry, {0, -1, -1, kUnitWidth}, {}, {true, false, false, false, false, false, false, false, false});
     w.output(ProgramTarget::emission, 0, geometry[0]);
     Material m = diffuse_closures("position");
     m.program = w.p;
@@ -483,7 +552,7 @@ TEST(ShaderProgram, LambertPathKeepsAClosureTextureBesideAProgram) {
     const float red[3] = {1.0f, 0.0f, 0.0f};
     const int32_t texture = static_cast<int32_t>(scene.add_texture(Texture("red", red, 1, 1, 3, ColorSpace::linear)));
     ProgramWriter w;
-    const auto n = w.op(ShaderOp::bump, {0, 0}, {w.constant(1.0f), w.constant(0.1f), w.constant(0.0f),
+    const auto n = w.op(ShaderOp::bump, {0, 0, kUnitWidth}, {w.constant(1.0f), w.constant(0.1f), w.constant(0.0f),
                                                  w.constant(0.0f), w.constant(0.0f), w.vec(glm::vec3(0.0f))});
     w.output(ProgramTarget::normal, 0, n[0]);
     Material m = diffuse_closures("textured and bumped");

@@ -27,7 +27,7 @@ ShaderProgram sky_world(const float* settings, int type, int disc) {
     ShaderProgram p;
     p.registers.assign(24, 0.0f);
     p.tables.assign(settings, settings + kSkySettingsFloats);
-    p.code = {static_cast<int32_t>(ShaderOp::texture_coordinate), 2, 0, 7, 0, -1, 0, 3, 6, 9, 12, 15, 18,
+    p.code = {static_cast<int32_t>(ShaderOp::texture_coordinate), 3, 0, 7, 0, -1, 0x3f800000 /* width 1.0f */, 0, 3, 6, 9, 12, 15, 18,
               static_cast<int32_t>(ShaderOp::sky_texture), 4, 1, 1, type, disc, 0, -1, 0, 21};
     p.outputs.push_back({ProgramTarget::emission, 0, 21});
     return p;

@@ -17,7 +17,7 @@ CLOSEST = 1  # environment_texture's interpolation param: Cycles' Closest
 def env_program(texture, interpolation=CLOSEST):
     """emission = Environment Texture(texture) along the direction (Texture Coordinate's Generated, which the
     world sets to the direction)."""
-    code = [OPS["texture_coordinate"]["id"], 2, 0, 7, 0, -1, 0, 3, 6, 9, 12, 15, 18,
+    code = [OPS["texture_coordinate"]["id"], 3, 0, 7, 0, -1, 0x3F800000, 0, 3, 6, 9, 12, 15, 18,   # width 1.0's bits
             OPS["environment_texture"]["id"], 3, 1, 2, texture, interpolation, 0, 0, 21, 24]
     return {"code": code, "registers": [0.0] * 25, "tables": [],
             "outputs": [{"target": "emission", "index": 0, "register": 21}]}

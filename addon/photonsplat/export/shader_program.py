@@ -9,7 +9,7 @@ symbolic Value: a Python constant (a float, or a 3-tuple for a colour or vector)
 (flattened: Group Output and Group Input sockets are looked through) and Blender's implicit conversions (colour ->
 float is the luminance, vector -> float the average, float -> vector a broadcast, colour <-> vector the same
 registers). Each node is compiled once per (node, group nesting, bump offset): a Bump node compiles its Height
-subgraph three times, with the shading point ops' `bump` param 0, 1 and 2.
+subgraph three times, with the shading point ops' `bump` param 0, 1 and 2 and its filter width (compat.py).
 
 Every node of Cycles 3.4's SVM that reads the shading point or computes is compiled to its op (NODES lists them);
 anything else (Point Density, IES, AO, Bevel, Wireframe, Script, Light Falloff, ...) gives its output
@@ -24,8 +24,11 @@ The op table (names, ids, param and operand counts) comes from the core, photons
 """
 
 import math
+import struct
 
 import numpy as np
+
+from .. import compat
 
 # Blender's colour -> float conversion (Cycles' linear_rgb_to_gray), as the core's color_to_float.
 LUMINANCE = (0.2126, 0.7152, 0.0722)
@@ -134,6 +137,11 @@ def socket_kind(socket):
     return None
 
 
+def float_bits(value):
+    """A float as the int32 param that holds its bits (the core reads it back with OpArgs::param_float)."""
+    return struct.unpack("<i", struct.pack("<f", float(value)))[0]
+
+
 def constant_of(socket):
     """A socket's own value as a constant of its kind (0 where it has none)."""
     kind = socket_kind(socket)
@@ -173,6 +181,7 @@ class ProgramBuilder:
         self.uses_texspace = False   # Generated coordinates: the mesh's texture space
         self.uses_object_info = False
         self.bump = 0                # the shading point offset of the ops emitted now (Bump's height)
+        self.bump_width = 1.0        # and the Bump node's filter width, the offset's length in differentials
         self.material_index = 0      # the material's pass index (Object Info's Material Index)
         self._memo = {}
         self._constants = {}
@@ -304,7 +313,7 @@ class ProgramBuilder:
     def output_value(self, out, stack):
         """The Value of output socket `out` of a node inside the group nesting `stack`."""
         node = out.node
-        key = (node.as_pointer(), tuple(n.as_pointer() for n in stack), self.bump)
+        key = (node.as_pointer(), tuple(n.as_pointer() for n in stack), self.bump, self.bump_width)
         results = self._memo.get(key)
         if results is None:
             if self._depth > 200:
@@ -330,12 +339,18 @@ class ProgramBuilder:
             return default
         return self.value_of(socket, stack)
 
-    def with_bump(self, offset, compute):
-        saved, self.bump = self.bump, offset
+    def with_bump(self, offset, width, compute):
+        # The centre is the point itself whatever the width: one compile serves the height and any other use.
+        saved = self.bump, self.bump_width
+        self.bump, self.bump_width = offset, (width if offset else 1.0)
         try:
             return compute()
         finally:
-            self.bump = saved
+            self.bump, self.bump_width = saved
+
+    def point_params(self, *params):
+        """The params of an op that reads the shading point: the bump offset, `params`, the filter width."""
+        return [self.bump, *params, float_bits(self.bump_width)]
 
 
 def _socket(sockets, key):
@@ -573,11 +588,11 @@ def _texco_default(b, kind):
     """A texture's unconnected Vector: Generated coordinates (Cycles' LINK_TEXTURE_GENERATED), UV, or the
     position."""
     if kind == "uv":
-        return b.emit("uv_map", [b.bump, -1], [])[0]
+        return b.emit("uv_map", b.point_params(-1), [])[0]
     if kind == "position":
-        return b.emit("geometry", [b.bump, -1, -1], [])[0]
+        return b.emit("geometry", b.point_params(-1, -1), [])[0]
     b.uses_texspace = True
-    return b.emit("texture_coordinate", [b.bump, -1], [])[0]
+    return b.emit("texture_coordinate", b.point_params(-1), [])[0]
 
 
 def _vector_input(b, node, stack, default="generated"):
@@ -598,7 +613,7 @@ def _normal_input(b, node, stack, key="Normal"):
         out, _, _ = follow(socket, stack)
         if out is not None:
             return b.value_of(socket, stack), True
-    return b.emit("geometry", [b.bump, -1, -1], [])[1], False
+    return b.emit("geometry", b.point_params(-1, -1), [])[1], False
 
 
 def _n_value(b, node, stack):
@@ -618,7 +633,7 @@ def _n_texture_coordinate(b, node, stack):
     if getattr(node, "from_instancer", False):
         b.notes.append("Texture Coordinate 'From Instancer' ignored (the instance's own coordinates used)")
     b.uses_texspace = True
-    regs = b.emit("texture_coordinate", [b.bump, matrix], [])
+    regs = b.emit("texture_coordinate", b.point_params(matrix), [])
     return _outs(["Generated", "Normal", "UV", "Object", "Camera", "Window", "Reflection"], regs)
 
 
@@ -626,7 +641,7 @@ def _n_uv_map(b, node, stack):
     if getattr(node, "from_instancer", False):
         b.notes.append("UV Map 'From Instancer' ignored (the instance's own UV map used)")
     name = getattr(node, "uv_map", "")
-    return {"UV": b.emit("uv_map", [b.bump, b.attribute(name) if name else -1], [])[0]}
+    return {"UV": b.emit("uv_map", b.point_params(b.attribute(name) if name else -1), [])[0]}
 
 
 def _n_attribute(b, node, stack):
@@ -636,24 +651,24 @@ def _n_attribute(b, node, stack):
         what = f"{kind.lower()} attribute" if kind != "GEOMETRY" else "attribute without a name"
         b.notes.append(f"Attribute node ({what} '{name}') not supported: black, 0 used")
         return {"Color": (0.0,) * 3, "Vector": (0.0,) * 3, "Fac": 0.0, "Alpha": 0.0}
-    regs = b.emit("attribute", [b.bump, b.attribute(name)], [])
+    regs = b.emit("attribute", b.point_params(b.attribute(name)), [])
     return _outs(["Color", "Vector", "Fac", "Alpha"], regs)
 
 
 def _n_vertex_color(b, node, stack):
     # An empty name is the mesh's default colour attribute (the mesh export resolves "").
     name = getattr(node, "layer_name", "")
-    regs = b.emit("attribute", [b.bump, b.attribute(name)], [])
+    regs = b.emit("attribute", b.point_params(b.attribute(name)), [])
     return {"Color": regs[0], "Alpha": regs[3]}
 
 
 def _n_geometry(b, node, stack):
     # Pointiness and Random Per Island cost the mesh export a pass over its edges: asked for only when linked.
-    params = [b.bump]
+    params = []
     for socket, name in (("Pointiness", POINTINESS), ("Random Per Island", RANDOM_PER_ISLAND)):
         output = _socket(node.outputs, socket)
         params.append(b.attribute(name) if output is not None and output.is_linked else -1)
-    regs = b.emit("geometry", params, [])
+    regs = b.emit("geometry", b.point_params(*params), [])
     return _outs(["Position", "Normal", "Tangent", "True Normal", "Incoming", "Parametric", "Backfacing",
                   "Pointiness", "Random Per Island"], regs)
 
@@ -752,10 +767,11 @@ def _n_normal_map(b, node, stack):
 def _n_bump(b, node, stack):
     normal, connected = _normal_input(b, node, stack)
     height_socket = _socket(node.inputs, "Height")
-    heights = [b.with_bump(k, lambda: b.value_of(height_socket, stack)) for k in (0, 1, 2)]
-    if "Filter Width" in node.inputs and _socket(node.inputs, "Filter Width").is_linked:
-        b.notes.append("Bump node's Filter Width ignored (Cycles 3.4's offset used)")
-    params = [int(getattr(node, "invert", False)), int(connected)]
+    width, note = compat.bump_filter_width(node)
+    if note:
+        b.notes.append(note)
+    heights = [b.with_bump(k, width, lambda: b.value_of(height_socket, stack)) for k in (0, 1, 2)]
+    params = [int(getattr(node, "invert", False)), int(connected), float_bits(width)]
     inputs = [b.inp(node, "Strength", stack), b.inp(node, "Distance", stack), *heights, normal]
     return {"Normal": b.emit("bump", params, inputs)[0]}
 

@@ -37,12 +37,14 @@ namespace ps {
     X(float_to_vector,   0, "f",      "v")   /* broadcast */                                                       \
     /* --- the shading point (shader_globals_ops.cpp) --- */                                                      \
     /* params: bump (0 centre, 1 dx, 2 dy: the point offset for a Bump node's height), object matrix (tables   */ \
-    /* offset of a 16-float column-major world → object matrix, -1: the hit object's own) */                      \
-    X(texture_coordinate, 2, "",      "vvvvvvv") /* generated, normal, uv, object, camera, window, reflection */  \
-    X(uv_map,            2, "",       "v")   /* params: bump, attribute id (-1: the render UV map) */              \
-    X(attribute,         2, "",       "vvff") /* params: bump, attribute id; color, vector, fac, alpha */          \
-    X(geometry,          3, "",       "vvvvvvfff") /* params: bump, pointiness attribute id, random per island */ \
-                                                   /* attribute id (-1: absent, 0 as Cycles' missing attribute);*/ \
+    /* offset of a 16-float column-major world → object matrix, -1: the hit object's own), the Bump node's     */ \
+    /* filter width (a float's bits: the offset is width × dPdx or dPdy; 1 in Blender 3.x, its input in 4.x)   */ \
+    X(texture_coordinate, 3, "",      "vvvvvvv") /* generated, normal, uv, object, camera, window, reflection */  \
+    X(uv_map,            3, "",       "v")   /* params: bump, attribute id (-1: the render UV map), width */       \
+    X(attribute,         3, "",       "vvff") /* params: bump, attribute id, width; color, vector, fac, alpha */   \
+    X(geometry,          4, "",       "vvvvvvfff") /* params: bump, pointiness attribute id, random per island */ \
+                                                   /* attribute id (-1: absent, 0 as Cycles' missing attribute),*/ \
+                                                   /* width;                                                    */ \
                                                    /* position, normal, tangent, true normal, incoming,         */ \
                                                    /* parametric, backfacing, pointiness, random per island     */ \
     X(object_info,       0, "",       "vvffff") /* location, color, alpha, object index, material index (always */ \
@@ -64,7 +66,8 @@ namespace ps {
                                              /* 4 blender world), uv attribute id, tangent attribute id (per    */ \
                                              /* corner: MikkTSpace tangent xyz, bitangent sign w; -1: the       */ \
                                              /* triangle's UV tangent); strength, color; normal */                 \
-    X(bump,              2, "fffffv", "v")   /* params: invert, normal connected; strength, distance, height,    */ \
+    X(bump,              3, "fffffv", "v")   /* params: invert, normal connected, filter width (a float's bits); */ \
+                                             /* strength, distance, height,                                     */ \
                                              /* height at dx, height at dy, normal; normal */                      \
     X(normal,            0, "vv",     "vf")  /* the node's direction, the input normal; normal, dot */             \
     X(vector_transform,  3, "v",      "v")   /* params: type (0 vector, 1 point, 2 normal), from, to (0 world,   */ \

@@ -2,6 +2,7 @@
 // and output registers resolved against the register file. Internal to the shader program sources.
 #pragma once
 #include <cstdint>
+#include <cstring>
 
 #include <glm/vec3.hpp>
 
@@ -16,6 +17,12 @@ struct OpArgs {
     float* reg;
 
     int param(int i) const { return params[i]; }
+    // A param that holds a float's bits (as Cycles packs a float into a node word).
+    float param_float(int i) const {
+        float value;
+        std::memcpy(&value, &params[i], sizeof value);
+        return value;
+    }
     float f(int i) const { return reg[in[i]]; }
     glm::vec3 v(int i) const { return glm::vec3(reg[in[i]], reg[in[i] + 1], reg[in[i] + 2]); }
     void set(int o, float value) const {

@@ -3,8 +3,10 @@
 // Definitions: Cycles 3.4's svm/tex_coord.h, geometry.h, attribute.h, light_path.h, camera.h, fresnel.h,
 // bump.h / displace.h, normal.h, vector_transform.h.
 //
-// A `bump` param of 1 or 2 evaluates the op at the shading point moved by dPdx or dPdy (Cycles' bump_dx / dy
-// variants), so that a Bump node's height is known at three points.
+// A `bump` param of 1 or 2 evaluates the op at the shading point moved by the Bump node's filter width times
+// dPdx or dPdy (Cycles' bump_dx / dy variants), so that a Bump node's height is known at three points. Blender
+// 3.x moves it a whole differential (width 1); from 4.1 the node's Filter Width input (0.1 by default) scales the
+// step, and the Bump divides the height's differences by it (svm_node_bump_P_dx, svm_node_set_bump).
 #include <algorithm>
 #include <cmath>
 
@@ -30,21 +32,33 @@ glm::vec3 input_normal(const ShaderGlobals& g, const glm::vec3& n) {
     return u == glm::vec3(0.0f) ? g.N : u;
 }
 
-glm::vec3 offset_of(const ShaderGlobals& g, int bump) {
-    return bump == 1 ? g.dPdx : bump == 2 ? g.dPdy : glm::vec3(0.0f);
+// Where an op reads the shading point: its `bump` param and the filter width param after it. A width that is
+// not a finite number moves nothing.
+struct BumpOffset {
+    int axis = 0;  // 0 the point itself, 1 along dPdx, 2 along dPdy
+    float width = 1.0f;
+};
+
+BumpOffset bump_offset(const OpArgs& a, int width_param) {
+    const float width = a.param_float(width_param);
+    return {a.param(0), std::isfinite(width) ? width : 0.0f};
 }
 
-glm::vec2 bary_at(const ShaderGlobals& g, int bump) {
-    return g.bary + (bump == 1 ? g.dbary_dx : bump == 2 ? g.dbary_dy : glm::vec2(0.0f));
+glm::vec3 offset_of(const ShaderGlobals& g, BumpOffset o) {
+    return o.width * (o.axis == 1 ? g.dPdx : o.axis == 2 ? g.dPdy : glm::vec3(0.0f));
+}
+
+glm::vec2 bary_at(const ShaderGlobals& g, BumpOffset o) {
+    return g.bary + o.width * (o.axis == 1 ? g.dbary_dx : o.axis == 2 ? g.dbary_dy : glm::vec2(0.0f));
 }
 
 // The object-space position at the bump offset.
-glm::vec3 object_point(const ShaderGlobals& g, int bump) {
+glm::vec3 object_point(const ShaderGlobals& g, BumpOffset bump) {
     return g.object_position + g.world_to_object_linear * offset_of(g, bump);
 }
 
 // An attribute (or the render UV map, id -1) interpolated at the bump offset's barycentrics; missing: 0.
-bool attribute_at(const ShaderGlobals& g, int32_t id, int bump, glm::vec4& value) {
+bool attribute_at(const ShaderGlobals& g, int32_t id, BumpOffset bump, glm::vec4& value) {
     value = glm::vec4(0.0f);
     if (g.mesh == nullptr) return false;
     const glm::vec2 b = bary_at(g, bump);
@@ -62,7 +76,7 @@ bool attribute_at(const ShaderGlobals& g, int32_t id, int bump, glm::vec4& value
     return true;
 }
 
-glm::vec3 generated(const ShaderGlobals& g, int bump) {
+glm::vec3 generated(const ShaderGlobals& g, BumpOffset bump) {
     if (g.background) return g.P;  // Cycles' background: generated coordinates are the direction
     if (g.mesh == nullptr) return glm::vec3(0.0f);
     const glm::vec3 p = object_point(g, bump);
@@ -121,7 +135,7 @@ glm::vec3 tangent_space_normal(const ShaderGlobals& g, int32_t uv_id, const glm:
 // interpolated (unnormalised) object-space normal; false when the mesh has no such attribute.
 bool mikktspace_normal(const ShaderGlobals& g, int32_t tangent_id, const glm::vec3& color, glm::vec3& out) {
     glm::vec4 t;
-    if (tangent_id < 0 || !attribute_at(g, tangent_id, 0, t)) return false;
+    if (tangent_id < 0 || !attribute_at(g, tangent_id, BumpOffset{}, t)) return false;
     const glm::vec2 b = g.bary;
     const size_t tri = g.triangle;
     glm::vec3 normal;
@@ -158,16 +172,17 @@ glm::vec3 normal_map(const ShaderGlobals& g, int space, int32_t uv_id, int32_t t
     return n;
 }
 
-// Cycles' Bump: the height's surface gradient from three samples a differential apart (Mikkelsen's method).
-glm::vec3 bump(const ShaderGlobals& g, bool invert, const glm::vec3& normal_in, float strength, float distance,
-               float h_c, float h_x, float h_y) {
+// Cycles' Bump: the height's surface gradient from three samples `width` differentials apart (Mikkelsen's
+// method). The height's differences are over width × dP, so the determinant is weighed by width to match.
+glm::vec3 bump(const ShaderGlobals& g, bool invert, float width, const glm::vec3& normal_in, float strength,
+               float distance, float h_c, float h_x, float h_y) {
     const glm::vec3 rx = glm::cross(g.dPdy, normal_in), ry = glm::cross(normal_in, g.dPdx);
     const float det = glm::dot(g.dPdx, rx);
     const glm::vec3 surfgrad = (h_x - h_c) * rx + (h_y - h_c) * ry;
     const float scale = invert ? -distance : distance;
     strength = std::max(strength, 0.0f);
     const float sign = det > 0.0f ? 1.0f : det < 0.0f ? -1.0f : 0.0f;
-    glm::vec3 out = safe_normalize(std::fabs(det) * normal_in - scale * sign * surfgrad);
+    glm::vec3 out = safe_normalize(width * std::fabs(det) * normal_in - scale * sign * surfgrad);
     if (out == glm::vec3(0.0f)) return normal_in;
     out = safe_normalize(strength * out + (1.0f - strength) * normal_in);
     if (out == glm::vec3(0.0f)) out = normal_in;
@@ -208,7 +223,7 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
     const ShaderCamera& cam = scene.shader_camera();
     switch (op) {
         case ShaderOp::texture_coordinate: {
-            const int bump_at = a.param(0);
+            const BumpOffset bump_at = bump_offset(a, 2);
             const glm::vec3 p = g.P + offset_of(g, bump_at);
             a.set(0, generated(g, bump_at));
             a.set(1, object_normal(g, g.N));
@@ -235,13 +250,13 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
         }
         case ShaderOp::uv_map: {
             glm::vec4 uv;
-            attribute_at(g, a.param(1), a.param(0), uv);
+            attribute_at(g, a.param(1), bump_offset(a, 2), uv);
             a.set(0, glm::vec3(uv.x, uv.y, 0.0f));
             return true;
         }
         case ShaderOp::attribute: {
             glm::vec4 v;
-            attribute_at(g, a.param(1), a.param(0), v);
+            attribute_at(g, a.param(1), bump_offset(a, 2), v);
             a.set(0, glm::vec3(v));
             a.set(1, glm::vec3(v));
             a.set(2, (v.x + v.y + v.z) * (1.0f / 3.0f));
@@ -249,11 +264,11 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
             return true;
         }
         case ShaderOp::geometry: {
-            const int bump_at = a.param(0);
+            const BumpOffset bump_at = bump_offset(a, 3);
             a.set(0, g.P + offset_of(g, bump_at));
             a.set(1, g.N);
             // Cycles' default tangent: about the Z axis through the texture space's centre.
-            const glm::vec3 gen = generated(g, 0);
+            const glm::vec3 gen = generated(g, BumpOffset{});
             const glm::vec3 radial = world_normal(g, glm::vec3(-(gen.y - 0.5f), gen.x - 0.5f, 0.0f));
             a.set(2, glm::cross(g.N, safe_normalize(glm::cross(radial, g.N))));
             a.set(3, g.Ng);
@@ -326,7 +341,9 @@ bool run_shading_point_op(ShaderOp op, const OpArgs& a, const float* tables, con
             return true;
         case ShaderOp::bump: {
             const glm::vec3 n_in = a.param(1) ? input_normal(g, a.v(5)) : g.N;
-            a.set(0, bump(g, a.param(0) != 0, n_in, a.f(0), a.f(1), a.f(2), a.f(3), a.f(4)));
+            const float width = a.param_float(2);
+            a.set(0, bump(g, a.param(0) != 0, std::isfinite(width) ? width : 0.0f, n_in, a.f(0), a.f(1), a.f(2),
+                          a.f(3), a.f(4)));
             return true;
         }
         case ShaderOp::normal: {
