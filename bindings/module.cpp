@@ -166,7 +166,7 @@ PYBIND11_MODULE(_core, m) {
             "add_material",
             [](ps::Scene& s, const std::string& name, const std::string& kind, const py::object& color, float ior,
                const py::object& emission, float roughness, int texture, bool holdout, const py::object& closures,
-               const py::object& factors, const py::object& program) {
+               const py::object& factors, const py::object& program, bool bump_map_correction) {
                 ps::Material mat;
                 mat.name = name;
                 mat.kind = ps::material_kind_from_string(kind);
@@ -177,6 +177,7 @@ PYBIND11_MODULE(_core, m) {
                 mat.roughness = roughness;  // validated by the core: finite, in [0, 1]
                 mat.texture = texture;      // validated by the scene: -1 or an existing texture
                 mat.holdout = holdout;
+                mat.bump_map_correction = bump_map_correction;
                 if (mat.kind == ps::MaterialKind::closures) {
                     mat.closures = closure_list(closures, where + ".closures");
                     mat.factors = factor_list(factors, where + ".factors");
@@ -189,6 +190,7 @@ PYBIND11_MODULE(_core, m) {
             "name"_a, "kind"_a = "diffuse", "color"_a = py::make_tuple(0.8, 0.8, 0.8), "ior"_a = 1.45f,
             "emission"_a = py::make_tuple(0.0, 0.0, 0.0), "roughness"_a = 0.5f, "texture"_a = -1, "holdout"_a = false,
             "closures"_a = py::none(), "factors"_a = py::none(), "program"_a = py::none(),
+            "bump_map_correction"_a = true,
             "Adds a material; returns its index for material_ids. kind 'diffuse', 'mirror', 'glass' or 'glossy' is a "
             "simple material from color, ior, roughness (glossy only, Blender's, in [0, 1]: GGX with alpha = "
             "roughness^2; <= 0.05 is a mirror) and texture (index of add_texture() whose colour at the hit's UV "
@@ -203,7 +205,9 @@ PYBIND11_MODULE(_core, m) {
             "multiplies a closure's weight (factors_on) or 1 - it (factors_off). program: a shader program dict "
             "(shader_program.h; code, registers, tables, outputs with target, index, register) that sets closure "
             "inputs, the emission and the normal at each hit. emission: radiance W/(sr m^2) "
-            "from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays.")
+"from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays. "
+            "bump_map_correction: Blender 4.x's material setting, which softens Cycles 4.x's bump shadowing term "
+            "(Scene.bump_shadowing).")
         .def(
             "add_point_light",
             [](ps::Scene& s, const std::string& name, const py::object& position, const py::object& intensity,

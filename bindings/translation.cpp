@@ -149,6 +149,16 @@ void bind_translation(py::module_& m) {
             "How light samples evaluate a Multiscatter GGX lobe: 'light_sample' (the default) as Cycles 3.x, whose "
             "evaluation towards a light tints each bounce after the first twice; 'walk' as its sampled directions "
             "(and Cycles 4.x) do, once.")
+        .def_property(
+            "bump_shadowing",
+            [](const ps::Scene& s) { return std::string(s.cycles4_bump_shadowing() ? "cycles4" : "cycles3"); },
+            [](ps::Scene& s, const std::string& name) {
+                if (name != "cycles3" && name != "cycles4")
+                    throw ps::InvalidInput("Scene.bump_shadowing", "must be 'cycles3' or 'cycles4', got '" + name + "'");
+                s.set_cycles4_bump_shadowing(name == "cycles4");
+            },
+            "Which bump shadowing term diffuse closures under a bumped or tilted normal take: 'cycles3' (the "
+            "default), Cycles 3.x's; 'cycles4', Cycles 4.x's, softened where a material's bump_map_correction is on.")
         .def(
             "add_mesh_data",
             [](ps::Scene& s, const std::string& name, const py::object& vertices, const py::object& triangles,

@@ -93,6 +93,17 @@ def principled_input(role):
 GLOSSY_BSDF_IDNAME = "ShaderNodeBsdfAnisotropic" if VERSION >= (4, 0, 0) else "ShaderNodeBsdfGlossy"
 
 
+def bump_map_correction(material):
+    """A material's Bump Map Correction (4.x, on by default), which softens Cycles 4.x's bump shadowing term;
+    Blender 3.x has no such setting (its term is another one: BUMP_SHADOWING)."""
+    return bool(getattr(getattr(material, "cycles", None), "use_bump_map_correction", True))
+
+
+# Cycles' bump shadowing term on diffuse closures under a bumped normal: 3.x's after Chiang et al., 4.x's after Conty
+# Estevez et al. (read in 4.5's and 5.0's kernels). The core's Scene.bump_shadowing.
+BUMP_SHADOWING = "cycles4" if VERSION >= (4, 0, 0) else "cycles3"
+
+
 def bump_filter_width(node):
     """A Bump node's filter width and a note, or None: how many ray differentials apart it samples its Height
     (the core's bump offsets). Blender 3.x samples one whole differential away. 4.x gave the node a Filter Width

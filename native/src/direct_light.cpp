@@ -61,6 +61,7 @@ void bsdf_of(const ViewSample& s, const std::vector<Lobe>& lobes, Bsdf& b) {
     b.wo = s.wo;
     b.smooth_n = s.smooth_normal;
     b.bump_shadowed = (s.flags & kBumpShadowed) != 0;
+    b.bump_form = bump_form_of(s.flags);
     b.lambert = s.albedo;
     // The splat's lobes and the narrow ones after them (view_samples.h): direct light takes them all.
     b.lobe_count = static_cast<int>(std::min<uint32_t>(uint32_t(s.lobe_count) + s.branched_lobes, kMaxLobes));

@@ -172,9 +172,9 @@ glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s
 // and the term 1 (an 80-face smooth sphere came out 0.944-1.006 of Cycles in its blocks with the term of the
 // arrival's tilt, 0.974-1.024 without). Where a program (Bump, Normal Map) makes the normal, that normal is the
 // one, tilted against wi as the photon sees it.
-float photon_bump_shadowing(const SurfacePoint& s, const glm::vec3& wi) {
+float photon_bump_shadowing(const Scene& scene, const SurfacePoint& s, const glm::vec3& wi) {
     if (!s.material->program_normal || !bump_shadowed(s.smooth_normal, s.shading_normal)) return 1.0f;
-    return bump_shadowing_term(s.smooth_normal, s.shading_normal, wi);
+    return bump_shadowing_term(scene.bump_shadowing(*s.material), s.smooth_normal, s.shading_normal, wi);
 }
 
 // A light with Cast Shadow off lights every surface facing it, occluded or not (Cycles takes no shadow ray for its
@@ -268,7 +268,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             direct = false;
             after_glossy = false;
             // Cycles' bump shadowing term of the light's direction, the photon's arrival (photon_bump_shadowing).
-            const float shadowing = photon_bump_shadowing(s, -ray.direction);
+            const float shadowing = photon_bump_shadowing(scene, s, -ray.direction);
             const glm::vec3 albedo = lambert_albedo(scene, s, -ray.direction) * shadowing;
             const float keep = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;

@@ -186,6 +186,7 @@ Bsdf shade_closures(const Scene& scene, const SurfacePoint& surface, const glm::
     if (m.directional && !(glm::dot(b.n, wo) > kMinShadingCosine)) b.n = b.ng;
     b.smooth_n = surface.smooth_normal;
     b.bump_shadowed = bump_shadowed(b.smooth_n, b.n);
+    b.bump_form = scene.bump_shadowing(m);
     if (m.holdout) return b;  // absorbs everything
 
     // The view-dependent factors, once per hit (Cycles evaluates Fresnel and Layer Weight at the shading point).
@@ -311,12 +312,12 @@ bool takes_bump_shadowing(const Lobe& l) {
 }
 
 float bump_shadowing_of(const Bsdf& b, const glm::vec3& wi) {
-    return b.bump_shadowed ? bump_shadowing_term(b.smooth_n, b.n, wi) : 1.0f;
+    return b.bump_shadowed ? bump_shadowing_term(b.bump_form, b.smooth_n, b.n, wi) : 1.0f;
 }
 
 void take_bump_shadowing(Bsdf& b, const glm::vec3& wi) {
     if (!b.bump_shadowed) return;
-    const float term = bump_shadowing_term(b.smooth_n, b.n, wi);
+    const float term = bump_shadowing_term(b.bump_form, b.smooth_n, b.n, wi);
     b.lambert *= term;
     for (int k = 0; k < b.lobe_count; ++k)
         if (takes_bump_shadowing(b.lobes[k])) b.lobes[k].weight *= term;

@@ -144,7 +144,8 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     if (path.depth == 0 && b != nullptr) sample.selection_floor = defensive_floor(*b);
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
-    if (bump_shadowed(sample.smooth_normal, sample.shading_normal)) sample.flags |= kBumpShadowed;
+    if (bump_shadowed(sample.smooth_normal, sample.shading_normal))
+        sample.flags |= kBumpShadowed | bump_form_flags(p.scene.bump_shadowing(*s.material));
     p.found.push_back(sample);
     if (p.found_terminator) {
         const TerminatorLift lift = terminator_lift(p.scene, s, s.geometric_normal);
@@ -175,7 +176,7 @@ void add_far_side_sample(PixelPaths& p, const CameraPath& path, const SurfacePoi
     sample.flags = (path.depth > 0 ? kViaSpecular : 0u) | (std::min<uint32_t>(path.branch, 0xffu) << kBranchShift);
     // The other side of a transmitting surface is another place: inside where the path stands outside.
     if (!inside_transmitter(s)) sample.flags |= kInsideSample;
-    if (b.bump_shadowed) sample.flags |= kBumpShadowed;
+    if (b.bump_shadowed) sample.flags |= kBumpShadowed | bump_form_flags(b.bump_form);
     sample.depth = p.first.depth;
     p.found_far_side.push_back(sample);
 }

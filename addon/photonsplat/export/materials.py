@@ -139,6 +139,7 @@ class MaterialSpec:
     summary: str = "diffuse"
     program: object = None         # shader_program.ProgramBuilder, or None (no node programs in the core)
     normal: object = None          # the shading normal's Reg (a Normal input driven by nodes), or None
+    bump_map_correction: bool = True  # Blender 4.x's setting: softens Cycles 4.x's bump shadowing term
 
     kind = "closures"
 
@@ -241,6 +242,8 @@ class MaterialSpec:
             arguments["program"] = self.program.encode(outputs, texture_index, attribute_id)
         if self.holdout:
             arguments["holdout"] = True
+        if not self.bump_map_correction:
+            arguments["bump_map_correction"] = False
         return arguments
 
     @property
@@ -319,6 +322,12 @@ def convert_material(material):
     """Map a Blender material (or None) to a MaterialSpec. Never raises for odd node setups."""
     if material is None:
         return default_material()
+    spec = _convert_material(material)
+    spec.bump_map_correction = compat.bump_map_correction(material)
+    return spec
+
+
+def _convert_material(material):
     name = material.name_full
     notes = []
 

@@ -104,6 +104,7 @@ class _Build:
         if hasattr(self.scene, "build_bvhs_ahead"):
             self.scene.build_bvhs_ahead = True
         self.scene.multiscatter_light_estimate = compat.MULTISCATTER_LIGHT_ESTIMATE
+        self.scene.bump_shadowing = compat.BUMP_SHADOWING
         self.material_notes = []
         self.materials = MaterialTable(self.scene, self.material_notes, specs)
         self.geometry = GeometryTable(self.scene, self.materials)

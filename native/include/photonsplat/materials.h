@@ -39,6 +39,7 @@ struct Material {
     int32_t texture = -1;      // index into Scene::textures() whose lookup at the hit's UV replaces `color`; -1: none
     bool holdout = false;      // Cycles' Holdout: cut out of the image (alpha 0, black) where the camera sees it,
                                // an absorbing black surface for every other ray
+    bool bump_map_correction = true;  // Blender 4.x's material setting: its bump shadowing term softens (bump_shadowing.h)
     // kind == closures, or filled by lower_simple_material:
     std::vector<Closure> closures;   // at most kMaxClosures
     std::vector<MixFactor> factors;  // at most kMaxFactors

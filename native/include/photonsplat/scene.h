@@ -27,6 +27,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/lights.h"
 #include "photonsplat/materials.h"
 #include "photonsplat/shader_program.h"
@@ -261,6 +262,14 @@ public:
         multiscatter_light_estimate_ = e == MultiScatterEstimate::walk ? MultiScatterEstimate::light_sample_as_walk : e;
     }
     MultiScatterEstimate multiscatter_light_estimate() const { return multiscatter_light_estimate_; }
+    // Which bump shadowing term diffuse closures under a bumped or tilted normal take (bump_shadowing.h): Cycles
+    // 3.x's (the default), or 4.x's, which each material's Bump Map Correction switches.
+    void set_cycles4_bump_shadowing(bool on) { cycles4_bump_shadowing_ = on; }
+    bool cycles4_bump_shadowing() const { return cycles4_bump_shadowing_; }
+    BumpShadowing bump_shadowing(const Material& m) const {
+        if (!cycles4_bump_shadowing_) return BumpShadowing::cycles3;
+        return m.bump_map_correction ? BumpShadowing::cycles4 : BumpShadowing::cycles4_uncorrected;
+    }
 
 private:
     std::vector<Material> materials_;
@@ -271,6 +280,7 @@ private:
     // After meshes_: goes first, dropping the builds not started and waiting for the running one.
     bool build_bvhs_ahead_ = false;
     MultiScatterEstimate multiscatter_light_estimate_ = MultiScatterEstimate::light_sample;
+    bool cycles4_bump_shadowing_ = false;
     std::unique_ptr<BvhQueue> bvh_queue_;
     std::vector<Instance> instances_;
     glm::vec3 background_{0.0f};

@@ -13,6 +13,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/closures.h"
 
 namespace ps {
@@ -30,6 +31,7 @@ struct Bsdf {
     // normal, a tilted one), the diffuse parts take bump_shadowing_term of the light's direction (bump_shadowing.h).
     glm::vec3 smooth_n{0.0f, 0.0f, 1.0f};
     bool bump_shadowed = false;
+    BumpShadowing bump_form = BumpShadowing::cycles3;  // which term (Scene::bump_shadowing of the material)
     glm::vec3 lambert{0.0f};         // Σ Lambert weights: f = lambert / π on wo's side
     Lobe lobes[kMaxLobes];
     int lobe_count = 0;

@@ -104,7 +104,8 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
 inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi, LabelShare share) {
     constexpr double inv_pi = 0.318309886183790671538;
     const float diffuse_term =
-        s.flags & kBumpShadowed ? bump_shadowing_term(s.smooth_normal, s.shading_normal, wi) : 1.0f;
+        s.flags & kBumpShadowed ? bump_shadowing_term(bump_form_of(s.flags), s.smooth_normal, s.shading_normal, wi)
+                                : 1.0f;
     if (!(s.flags & kGlossy))
         return share == LabelShare::other ? glm::dvec3(0.0) : glm::dvec3(s.albedo) * (inv_pi * diffuse_term);
     return glm::dvec3(bsdf_eval_reflection(s.albedo, lobes + s.lobe_begin, static_cast<int>(s.lobe_count),

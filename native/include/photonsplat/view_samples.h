@@ -10,6 +10,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "photonsplat/bump_shadowing.h"
 #include "photonsplat/camera.h"
 #include "photonsplat/closures.h"
 #include "photonsplat/shadow_terminator.h"
@@ -32,7 +33,21 @@ enum ViewSampleFlags : uint32_t {
     // The shading normal is not the interpolated one (smooth_normal): its diffuse parts take Cycles' bump
     // shadowing term of each photon's direction (bump_shadowing.h).
     kBumpShadowed = 16u,
+    // Which term (bump_shadowing.h): with neither bit, Cycles 3.x's.
+    kBumpShadowingCycles4 = 32u,
+    kBumpUncorrected = 64u,  // with kBumpShadowingCycles4: the material's Bump Map Correction is off
 };
+
+// The flags that record a bump shadowing term's form, and the form they record.
+inline uint32_t bump_form_flags(BumpShadowing form) {
+    return form == BumpShadowing::cycles3 ? 0u
+           : form == BumpShadowing::cycles4 ? uint32_t(kBumpShadowingCycles4)
+                                            : uint32_t(kBumpShadowingCycles4) | uint32_t(kBumpUncorrected);
+}
+inline BumpShadowing bump_form_of(uint32_t flags) {
+    if (!(flags & kBumpShadowingCycles4)) return BumpShadowing::cycles3;
+    return flags & kBumpUncorrected ? BumpShadowing::cycles4_uncorrected : BumpShadowing::cycles4;
+}
 
 // Bits 8–15 of ViewSample::flags: which branch of its pixel's camera path a sample ends (0 for the path that
 // stayed; the first hit's other parts each start a branch), so that each sample draws its own random numbers.

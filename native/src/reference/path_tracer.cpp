@@ -66,7 +66,7 @@ ViewSample vertex_at(const SurfacePoint& s, const Bsdf& b, const glm::vec3& orig
         if (!is_transmission(b.lobes[k])) lobes[v.lobe_count++] = b.lobes[k];
     v.flags = (v.lobe_count > 0 ? kGlossy : 0u) |
               (inside_transmitter(s) ? static_cast<uint32_t>(kInsideSample) : 0u) |
-              (b.bump_shadowed ? static_cast<uint32_t>(kBumpShadowed) : 0u);
+              (b.bump_shadowed ? static_cast<uint32_t>(kBumpShadowed) | bump_form_flags(b.bump_form) : 0u);
     return v;
 }
 
