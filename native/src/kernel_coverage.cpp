@@ -38,7 +38,8 @@ float diffuse_share(const ViewSample& s, const std::vector<Lobe>& lobes) {
     return total > 0.0f && std::isfinite(diffuse / total) ? std::clamp(diffuse / total, 0.0f, 1.0f) : 0.0f;
 }
 
-constexpr int kMaxSpecularCrossings = 4;  // mirrors and glass a probe passes through before it gives up
+constexpr int kMaxSpecularCrossings = 4;
+constexpr float kSamePlaneCosine = 0.9995f;  // a probe's surface this near the sample's normal, at its height: its plane  // mirrors and glass a probe passes through before it gives up
 
 // What a probe finds of the surface photons land on: along the segment from `start` in direction `down` (length
 // `length`), the first surface that stores photons (one with a closure that reflects other than a delta: diffuse,
@@ -76,6 +77,21 @@ ProbeHit probe_from(const Scene& scene, const Ray& ray, Hit hit, float length, c
         const float t_min = std::nextafter(hit.t, length) + 1e-6f * length;  // just past the specular surface
         if (!scene.ray_tracer().intersect(ray, t_min, length, hit, kPhotonReceivers)) return {};
     }
+}
+
+// Whether `ray` gets from t_min to t_max without meeting a surface photons land on (mirrors and glass are passed
+// through, as probes pass them).
+bool clear(const Scene& scene, const Ray& ray, float t_min, float t_max) {
+    Hit hit;
+    for (int crossing = 0; crossing <= kMaxSpecularCrossings; ++crossing) {
+        if (!scene.ray_tracer().intersect(ray, t_min, t_max, hit, kPhotonReceivers)) return true;
+        const Instance& instance = scene.instances()[hit.instance];
+        const MeshData& mesh = scene.meshes()[instance.mesh];
+        const Material& material = scene.materials()[mesh.materials[hit.triangle]];
+        if (material.reflects || material.translucent) return false;
+        t_min = std::nextafter(hit.t, t_max) + 1e-6f * t_max;  // just past the specular surface
+    }
+    return false;
 }
 
 // Probe k lies in the k-th of kCoverageProbes equal-area rings of the tangent disc, at a random radius within it
@@ -129,16 +145,60 @@ float sample_coverage(const Scene& scene, const ViewSample& s, const glm::vec3& 
     Hit first[kCoverageProbes];
     bool found[kCoverageProbes];
     scene.ray_tracer().intersect(rays, t_min, length, kCoverageProbes, kPhotonReceivers, first, found);
-    float area = 0.0f;
+    // What each probe found, and the probes that found the sample's own plane going on: those count only if the
+    // sample reaches the probe's column (its top, at least half the radius above the disc: a segment grazing the
+    // disc's plane would meet it; above the tangent plane all the way, the segment never meets the sample's own
+    // convex surface). A plane going on behind a wall standing on it, or below a floor laid across it, is in the
+    // wall's or the floor's shadow, and none of the sample's light lands there. Other surfaces in the ball keep
+    // counting whatever lies between: the splat gathers their photons too (overlapping letters of a text under a
+    // wide kernel, each lit, would otherwise be brightened up to 1 / kMinCoverage). Counting them darkened the
+    // pixel row along the foot of a lit wall to 0.882 of Cycles' (tests/blender/test_kernel_coverage_walls.py).
+    ProbeHit hits[kCoverageProbes];
+    Ray segments[kCoverageProbes];
+    float segment_min[kCoverageProbes], segment_length[kCoverageProbes];
+    int checked[kCoverageProbes], checks = 0;
+    // Lifted by a thousandth of the radius (and past the surface's rounding), and blind for as long again (a sample
+    // on the very edge where a wall meets a floor starts on the wall's plane): relative to the kernel, so that the
+    // segments meet the same surfaces at every scale.
+    const float skip = 1e-3f * r;
+    const glm::vec3 from = offset_ray_origin(x + skip * s.normal, s.normal, s.rounding_scale);
     for (int k = 0; k < kCoverageProbes; ++k) {
         if (!found[k]) continue;
-        const ProbeHit hit = probe_from(scene, rays[k], first[k], length[k], s.normal, params.cos_normal_tolerance);
-        if (hit.cosine == 0.0f) continue;
+        hits[k] = probe_from(scene, rays[k], first[k], length[k], s.normal, params.cos_normal_tolerance);
+        const float height = 0.5f * length[k] - hits[k].t;  // of the surface found, above the tangent plane
+        if (hits[k].cosine > kSamePlaneCosine && std::fabs(height) < skip) {
+            const glm::vec3 column = rays[k].origin + std::max(0.0f, 0.5f * r - 0.5f * length[k]) * s.normal;
+            const glm::vec3 d = column - from;
+            const float l = glm::length(d);
+            if (!(l > skip) || !std::isfinite(l)) continue;
+            segments[checks] = Ray{from, d / l};
+            segment_min[checks] = skip;
+            segment_length[checks] = l;
+            checked[checks++] = k;
+        }
+    }
+    // The segments leave one point: traced as one packet; one that meets a mirror or glass goes on past it alone.
+    Hit blocker[kCoverageProbes];
+    bool met[kCoverageProbes];
+    if (checks > 0)
+        scene.ray_tracer().intersect(segments, segment_min, segment_length, checks, kPhotonReceivers, blocker, met);
+    for (int c = 0; c < checks; ++c) {
+        if (!met[c]) continue;
+        const Instance& instance = scene.instances()[blocker[c].instance];
+        const MeshData& mesh = scene.meshes()[instance.mesh];
+        const Material& material = scene.materials()[mesh.materials[blocker[c].triangle]];
+        const float past = std::nextafter(blocker[c].t, segment_length[c]) + 1e-6f * segment_length[c];
+        if (material.reflects || material.translucent || !clear(scene, segments[c], past, segment_length[c]))
+            hits[checked[c]].cosine = 0.0f;  // not reached: the probe finds nothing of the sample's light
+    }
+    float area = 0.0f;
+    for (int k = 0; k < kCoverageProbes; ++k) {
+        if (!found[k] || hits[k].cosine == 0.0f) continue;
         const float h = 0.5f * length[k];
-        const float height = h - hit.t;  // of the surface found, above the tangent plane
+        const float height = h - hits[k].t;
         const float weight =
             pattern.uniform ? 1.0f : std::max(2.0f * (1.0f - (rho2[k] + height * height) / (r * r)), 0.0f);
-        area += weight / hit.cosine;
+        area += weight / hits[k].cosine;
     }
     return pattern.plane > 0.0f ? std::max(area / pattern.plane, kMinCoverage) : 1.0f;
 }

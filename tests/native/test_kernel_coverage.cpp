@@ -84,6 +84,36 @@ TEST(KernelCoverage, NearAnEdgeItIsTheDiscLeftOnThePlate) {
     EXPECT_LT(measured, 0.93);  // and the edge matters to that mean
 }
 
+TEST(KernelCoverage, AWallStandingOnAFloorHidesTheFloorBehindIt) {
+    // The plate's test again, the floor now going on past x = 0.2 under a wall standing there (reaching 1 above
+    // the floor and 1 below it, as a modeller's wall often pokes through): the floor behind the wall gets none of
+    // the light of the floor in front, so a sample in front keeps only the disc on its side of the wall. Counting
+    // the floor behind (coverage 1 there) darkened a floor's pixels along the foot of a lit wall by 12 %.
+    Scene scene;
+    const uint32_t material = diffuse(scene);
+    test::add_quad(scene, "floor", {-50, -50, 0}, {50, -50, 0}, {50, 50, 0}, {-50, 50, 0}, material);
+    test::add_quad(scene, "wall", {0.2f, -50, -1}, {0.2f, 50, -1}, {0.2f, 50, 1}, {0.2f, -50, 1}, material);
+    const ViewSamples samples = samples_of(scene, test::top_down_camera(2.0f));
+    const float r = 0.3f;
+    constexpr int kSeeds = 32;
+    double measured = 0.0, expected = 0.0;
+    int in_front = 0, near_wall = 0;
+    std::vector<std::vector<float>> coverages;
+    for (int seed = 1; seed <= kSeeds; ++seed) coverages.push_back(coverage_of(scene, samples, r, Kernel::uniform, seed));
+    for (size_t i = 0; i < samples.samples.size(); ++i) {
+        const ViewSample& s = samples.samples[i];
+        const double x = s.position.x + samples.origin.x;
+        if (s.normal.z < 0.99f || x >= 0.2) continue;  // the floor in front of the wall
+        for (const std::vector<float>& coverage : coverages) measured += coverage[i];
+        expected += kSeeds * std::max(1.0 - test::disc_beyond_edge(0.2 - x, r), double(kMinCoverage));
+        ++in_front;
+        near_wall += (0.2 - x < r) ? 1 : 0;
+    }
+    ASSERT_GT(near_wall, 500);
+    EXPECT_NEAR(measured / expected, 1.0, 0.01);
+    EXPECT_LT(measured / (double(kSeeds) * in_front), 0.93);  // the wall matters to the mean
+}
+
 TEST(KernelCoverage, ASphereHoldsTheAreaOfAPlane) {
     // A ball of radius r centred on a sphere of radius R >= r/2 holds exactly π r² of it (Archimedes), so the
     // uncorrected estimate on a sphere is not biased by its curvature: the coverage there must be 1, though the

@@ -26,13 +26,15 @@ constexpr float kMinCoverage = 0.25f;
 // to 2 where surfaces tilted by the normal tolerance fill the ball. Each probe point of the tangent disc is
 // tested by a ray along −n through the kernel's ball: the first non-specular surface it meets counts if it
 // faces within the splat's normal tolerance of the sample's normal, with the area it stands for (over the
-// cosine of its tilt) and the kernel's weight at its distance. Mirrors and glass are passed through (photons
-// land on what lies behind them). Glossy parts keep their estimate: a sample's coverage c is taken as
-// 1 − (1 − c) d, d its diffuse-like share (kernel_coverage.cpp says why). One probe pattern, drawn from (seed,
-// kernel_coverage), serves every sample. Multi-threaded, deterministic for a seed. With `wanted` (index-aligned
-// with samples.samples), only the samples it marks are measured and the others keep 1: a radius level's light
-// (photon_density.h) reaches few samples, and a small radius blends few grid pixels, so measuring all would cost
-// several times the whole frame's correction.
+// cosine of its tilt) and the kernel's weight at its distance. A probe that finds the sample's own plane going
+// on counts only if the sample reaches the probe's column (the segment from the sample to it crosses no surface
+// photons land on): the floor behind a wall standing on it lies in the wall's shadow, not in the light of the
+// floor in front. Mirrors and glass are passed through (photons land on what lies behind them).
+// Glossy parts keep their estimate: a sample's coverage c is taken as 1 − (1 − c) d, d its diffuse-like share
+// (kernel_coverage.cpp says why). One probe pattern, drawn from (seed, kernel_coverage), serves every sample.
+// Multi-threaded, deterministic for a seed. With `wanted` (index-aligned with samples.samples), only the samples
+// it marks are measured and the others keep 1: a radius level's light (photon_density.h) reaches few samples, and
+// a small radius blends few grid pixels, so measuring all would cost several times the whole frame's correction.
 std::vector<float> kernel_coverage(const Scene& scene, const ViewSamples& samples, const SplatParams& params,
                                    uint64_t seed, const RenderControl& control, Stats& stats,
                                    const std::vector<uint8_t>* wanted = nullptr);
