@@ -298,6 +298,28 @@ TEST(ShaderProgram, BumpTiltsTheNormalAgainstTheHeightsGradient) {
 }
 
 
+// The unit quad under a Bump of distance 0.3 and filter width `width` whose Height is an object-space function of
+// the position: its coordinates' mean (linear), or their squares' mean (quadratic).
+void add_bumped_quad(Scene& scene, float width, bool quadratic) {
+    ProgramWriter w;
+    std::vector<int> heights;
+    for (int k = 0; k < 3; ++k) {
+        const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, width_bits(width)}, {},
+                             {false, false, false, true, false, false, false});
+        int height = tc[3];
+        if (quadratic)
+            height = w.op(ShaderOp::vector_math, {2}, {tc[3], tc[3], w.vec(glm::vec3(0.0f)), w.constant(1.0f)},
+                          {true, false})[0];
+        heights.push_back(w.op(ShaderOp::vector_to_float, {}, {height})[0]);
+    }
+    const auto n = w.op(ShaderOp::bump, {0, 0, width_bits(width)},
+                        {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2], w.vec(glm::vec3(0.0f))});
+    w.output(ProgramTarget::normal, 0, n[0]);
+    Material m = diffuse_closures("bumped");
+    m.program = w.p;
+    scene.add_instance(add_quad(scene, scene.add_material(m), scene.attribute_id("Col")), glm::mat4(1.0f));
+}
+
 TEST(ShaderProgram, BumpSamplesItsHeightAFilterWidthOfDifferentialsAway) {
     // Height = (x² + y²) / 3 in object space, distance 0.3, under an orthographic camera whose pixel is dP = 0.2
     // across. Cycles moves the height's samples width × dP along its two orthonormals a, b about N = z
@@ -311,22 +333,7 @@ TEST(ShaderProgram, BumpSamplesItsHeightAFilterWidthOfDifferentialsAway) {
         camera.orthographic = true;
         camera.pixel_spread = dP;
         scene.set_shader_camera(camera);
-        ProgramWriter w;
-        std::vector<int> heights;
-        for (int k = 0; k < 3; ++k) {
-            const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, width_bits(width)}, {},
-                                 {false, false, false, true, false, false, false});
-            const auto squares = w.op(ShaderOp::vector_math, {2}, {tc[3], tc[3], w.vec(glm::vec3(0.0f)), w.constant(1.0f)},
-                                      {true, false});
-            heights.push_back(w.op(ShaderOp::vector_to_float, {}, {squares[0]})[0]);
-        }
-        const auto n = w.op(ShaderOp::bump, {0, 0, width_bits(width)},
-                            {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2],
-                             w.vec(glm::vec3(0.0f))});
-        w.output(ProgramTarget::normal, 0, n[0]);
-        Material m = diffuse_closures("bumped");
-        m.program = w.p;
-        scene.add_instance(add_quad(scene, scene.add_material(m), scene.attribute_id("Col")), glm::mat4(1.0f));
+        add_bumped_quad(scene, width, true);
         const glm::vec3 seen_gradient =
             glm::vec3(2.0f * x / 3.0f, 2.0f * y / 3.0f, 0.0f) + (width * dP / 3.0f) * glm::vec3(std::sqrt(2.0f), 0, 0);
         SCOPED_TRACE(width);
@@ -339,24 +346,12 @@ TEST(ShaderProgram, BumpOfFilterWidthZeroOrNotANumberKeepsItsNormal) {
     // No step: the three heights are one, and the Bump hands its input normal on (Cycles' is_zero branch).
     for (const float width : {0.0f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
         Scene scene;
-        ProgramWriter w;
-        std::vector<int> heights;
-        for (int k = 0; k < 3; ++k) {
-            const auto tc = w.op(ShaderOp::texture_coordinate, {k, -1, width_bits(width)}, {},
-                                 {false, false, false, true, false, false, false});
-            heights.push_back(w.op(ShaderOp::vector_to_float, {}, {tc[3]})[0]);
-        }
-        const auto n = w.op(ShaderOp::bump, {0, 0, width_bits(width)},
-                            {w.constant(1.0f), w.constant(0.3f), heights[0], heights[1], heights[2],
-                             w.vec(glm::vec3(0.0f))});
-        w.output(ProgramTarget::normal, 0, n[0]);
-        Material m = diffuse_closures("bumped");
-        m.program = w.p;
-        scene.add_instance(add_quad(scene, scene.add_material(m), scene.attribute_id("Col")), glm::mat4(1.0f));
+        add_bumped_quad(scene, width, false);
         SCOPED_TRACE(width);
         expect_vec_near(hit_at(scene, 0.1f, 0.2f).shading_normal, glm::vec3(0.0f, 0.0f, 1.0f), 1e-6f);
     }
 }
+
 TEST(ShaderProgram, TangentSpaceNormalMapFollowsTheUvs) {
     Scene scene;
     ProgramWriter w;
