@@ -760,7 +760,9 @@ def _fresnel_split(b, notes, eta):
         key = ("fresnel", eta)
         return (lambda c: replace(c, factors_on=c.factors_on + (key,)),
                 lambda c: replace(c, factors_off=c.factors_off + (key,)))
-    normal = notes.normal if notes.normal is not None else b.emit("geometry", b.point_params(-1, -1), [])[1]
+    normal = notes.normal
+    if normal is None:   # the shading point's own normal, at the point itself (bump offset 0, width 1)
+        normal = b.emit("geometry", [0, -1, -1, sp.float_bits(1.0)], [])[1]
     f = b.emit("fresnel", [], [eta, normal])[0]
     rest = sp.one_minus(b, f)
     return (lambda c: replace(c, color=sp.mul(b, c.color, f)),
