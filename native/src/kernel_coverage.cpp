@@ -38,8 +38,9 @@ float diffuse_share(const ViewSample& s, const std::vector<Lobe>& lobes) {
     return total > 0.0f && std::isfinite(diffuse / total) ? std::clamp(diffuse / total, 0.0f, 1.0f) : 0.0f;
 }
 
-constexpr int kMaxSpecularCrossings = 4;
-constexpr float kSamePlaneCosine = 0.9995f;  // a probe's surface this near the sample's normal, at its height: its plane  // mirrors and glass a probe passes through before it gives up
+constexpr int kMaxSpecularCrossings = 4;  // mirrors and glass a probe passes through before it gives up
+// A probe's surface this near the sample's normal, at the sample's height: the sample's own plane going on.
+constexpr float kSamePlaneCosine = 0.9995f;
 
 // What a probe finds of the surface photons land on: along the segment from `start` in direction `down` (length
 // `length`), the first surface that stores photons (one with a closure that reflects other than a delta: diffuse,
