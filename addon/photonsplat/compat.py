@@ -104,19 +104,25 @@ def bump_map_correction(material):
 BUMP_SHADOWING = "cycles4" if VERSION >= (4, 0, 0) else "cycles3"
 
 
-def bump_filter_width(node):
+def bump_filter_width(node, folded=None):
     """A Bump node's filter width and a note, or None: how many ray differentials apart it samples its Height
     (the core's bump offsets). Blender 3.x samples one whole differential away. 4.x gave the node a Filter Width
-    input (0.1 for a new node; files from before it load with 1, 3.x's step): Cycles compiles it as a constant of
-    the node (svm_node_bump_P_dx), so a link into it is not followed and the socket's own value stands."""
+    input (0.1 for a new node; files from before it load with 1, 3.x's step), which Cycles compiles as a constant
+    of the node (svm_node_bump_P_dx): a link into it counts where it folds to a constant (`folded`: measured in
+    Cycles 4.5 with a Value node and a Math node of constants), and otherwise the socket's own value stands (a
+    Noise texture's link: the same pixels as the socket's value alone)."""
     socket = node.inputs.get("Filter Width")
     if socket is None:
         return 1.0, None
-    width = float(socket.default_value)
+    note = None
+    if socket.is_linked and folded is not None:
+        width = float(folded)
+    else:
+        width = float(socket.default_value)
+        if socket.is_linked:
+            note = f"Bump node's Filter Width varies over the surface: its own value {width:g} used, as Cycles does"
     if not math.isfinite(width) or width < 0.0:
         return 0.0, f"Bump node's Filter Width {width} read as 0"
-    note = f"Bump node's Filter Width link not followed ({width:g} used, as Cycles does)" if socket.is_linked \
-        else None
     return width, note
 
 

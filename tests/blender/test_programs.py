@@ -368,6 +368,30 @@ def test_bump_compiles_its_height_three_times(empty_scene, op_table):
     assert output["target"] == "normal" and output["register"] == bump_op[3][0]
 
 
+@pytest.mark.skipif(bpy.app.version < (4, 1, 0), reason="the Bump node's Filter Width came with Blender 4.1")
+@pytest.mark.parametrize("driver, expected", [("ShaderNodeValue", 3.0), ("ShaderNodeTexNoise", 0.25)])
+def test_a_linked_filter_width_counts_where_it_is_constant(driver, expected, empty_scene, op_table):
+    """Cycles compiles a Bump's Filter Width as a constant of the node: a link into it counts where it folds to a
+    constant (a Value node: 3), and otherwise the socket's own value stands (a Noise texture: 0.25), with a note.
+    Measured in Cycles 4.5 on tests/blender/test_bump_filter_width.py's scene: each linked case gave the pixels of
+    the value used here (0 difference), 0.06-0.26 off the others."""
+    mat, tree, shader = diffuse_material()
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    bump = tree.nodes.new("ShaderNodeBump")
+    bump.inputs["Filter Width"].default_value = 0.25
+    source = tree.nodes.new(driver)
+    if driver == "ShaderNodeValue":
+        source.outputs[0].default_value = 3.0
+    tree.links.new(source.outputs[0], bump.inputs["Filter Width"])
+    tree.links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    tree.links.new(bump.outputs["Normal"], shader.inputs["Normal"])
+    spec, program, code = program_of(mat, op_table)
+    (bump_op,) = [c for c in code if c[0] == "bump"]
+    assert bump_op[1][2] == shader_program.float_bits(expected)
+    varies = any("Filter Width varies" in note for note in spec.notes)
+    assert varies == (driver != "ShaderNodeValue"), spec.notes
+
+
 def test_normal_map_registers_its_uv_map(empty_scene, op_table):
     mat, tree, shader = diffuse_material()
     normal_map = tree.nodes.new("ShaderNodeNormalMap")

@@ -767,7 +767,12 @@ def _n_normal_map(b, node, stack):
 def _n_bump(b, node, stack):
     normal, connected = _normal_input(b, node, stack)
     height_socket = _socket(node.inputs, "Height")
-    width, note = compat.bump_filter_width(node)
+    width_socket = _socket(node.inputs, "Filter Width")
+    folded = None
+    if width_socket is not None and width_socket.is_linked:
+        value = b.value_of(width_socket, stack)      # not read where it varies: the core drops what nothing reads
+        folded = value if is_const(value) else None
+    width, note = compat.bump_filter_width(node, folded)
     if note:
         b.notes.append(note)
     heights = [b.with_bump(k, width, lambda: b.value_of(height_socket, stack)) for k in (0, 1, 2)]
