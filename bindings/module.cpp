@@ -205,7 +205,7 @@ PYBIND11_MODULE(_core, m) {
             "multiplies a closure's weight (factors_on) or 1 - it (factors_off). program: a shader program dict "
             "(shader_program.h; code, registers, tables, outputs with target, index, register) that sets closure "
             "inputs, the emission and the normal at each hit. emission: radiance W/(sr m^2) "
-"from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays. "
+            "from both faces. holdout: cut out of the image where the camera sees it (alpha 0), black for other rays. "
             "bump_map_correction: Blender 4.x's material setting, which softens Cycles 4.x's bump shadowing term "
             "(Scene.bump_shadowing).")
         .def(

@@ -80,16 +80,20 @@ ProbeHit probe_from(const Scene& scene, const Ray& ray, Hit hit, float length, c
     }
 }
 
+// Whether the surface a hit found stores photons (probe_from says which): the segments' test of what blocks.
+bool receives_photons(const Scene& scene, const Hit& hit) {
+    const Instance& instance = scene.instances()[hit.instance];
+    const Material& material = scene.materials()[scene.meshes()[instance.mesh].materials[hit.triangle]];
+    return material.reflects || material.translucent;
+}
+
 // Whether `ray` gets from t_min to t_max without meeting a surface photons land on (mirrors and glass are passed
 // through, as probes pass them).
 bool clear(const Scene& scene, const Ray& ray, float t_min, float t_max) {
     Hit hit;
     for (int crossing = 0; crossing <= kMaxSpecularCrossings; ++crossing) {
         if (!scene.ray_tracer().intersect(ray, t_min, t_max, hit, kPhotonReceivers)) return true;
-        const Instance& instance = scene.instances()[hit.instance];
-        const MeshData& mesh = scene.meshes()[instance.mesh];
-        const Material& material = scene.materials()[mesh.materials[hit.triangle]];
-        if (material.reflects || material.translucent) return false;
+        if (receives_photons(scene, hit)) return false;
         t_min = std::nextafter(hit.t, t_max) + 1e-6f * t_max;  // just past the specular surface
     }
     return false;
@@ -185,11 +189,8 @@ float sample_coverage(const Scene& scene, const ViewSample& s, const glm::vec3& 
         scene.ray_tracer().intersect(segments, segment_min, segment_length, checks, kPhotonReceivers, blocker, met);
     for (int c = 0; c < checks; ++c) {
         if (!met[c]) continue;
-        const Instance& instance = scene.instances()[blocker[c].instance];
-        const MeshData& mesh = scene.meshes()[instance.mesh];
-        const Material& material = scene.materials()[mesh.materials[blocker[c].triangle]];
         const float past = std::nextafter(blocker[c].t, segment_length[c]) + 1e-6f * segment_length[c];
-        if (material.reflects || material.translucent || !clear(scene, segments[c], past, segment_length[c]))
+        if (receives_photons(scene, blocker[c]) || !clear(scene, segments[c], past, segment_length[c]))
             hits[checked[c]].cosine = 0.0f;  // not reached: the probe finds nothing of the sample's light
     }
     float area = 0.0f;
