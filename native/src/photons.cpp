@@ -32,6 +32,8 @@ namespace ps {
 
 namespace {
 
+constexpr float kInvPi = 0.318309886183790671538f;
+
 // Photons are traced in fixed chunks of consecutive indices, and the chunks' photons concatenated in chunk
 // order: the photon map is then the same whatever the number of threads.
 constexpr uint64_t kChunk = 4096;
@@ -144,6 +146,36 @@ glm::vec3 weight_seen_from_exit(const Scene& scene, const SurfacePoint& s, const
     return f * (std::fabs(glm::dot(step.direction, b.n)) / step.pdf);
 }
 
+// Whether a photon scatters off s as the camera path arriving from its next direction sees s
+// (photon_shading_normals.h): on a smooth-shaded triangle whose normal no program sets (a Bump's or Normal Map's
+// normal is tilted against the photon's arrival, as before).
+bool scatters_as_seen_from_exit(const SurfacePoint& s) {
+    return !s.material->program_normal && shading_normal_tilted(s.smooth_normal, s.geometric_normal);
+}
+
+// The share of scatters off such a surface drawn against the triangle (cosine-weighted about n_g), the rest by the
+// closures: enough that the band between the two horizons is reached, little enough that narrow lobes stay drawn
+// mostly by their own sampler.
+constexpr float kHorizonDraw = 0.25f;
+
+// A photon's weight across a reflection by the lobes of s (arrived along b.wo, b seen from there; drawn_from what
+// bsdf_sample drew with) into wo, on a surface that scatters_as_seen_from_exit: f (n_c·ω_i)/(n_g·ω_i) (n_g·ω_o) / pdf,
+// with f and n_c = exit_normal(s, wo) as the camera path coming along wo shades s, and pdf the mixture of the
+// horizon draw and the closures' draw (their density of wo times that of choosing the lobes). Cycles' convention
+// already (a reflection: no photon_units_across).
+glm::vec3 weight_seen_along_exit_normal(const Scene& scene, const SurfacePoint& s, const Bsdf& b,
+                                        const Bsdf& drawn_from, const glm::vec3& wo) {
+    const float cos_g = glm::dot(s.geometric_normal, wo);
+    if (!(cos_g > 0.0f)) return glm::vec3(0.0f);
+    const float pdf = kHorizonDraw * cos_g * kInvPi + (1.0f - kHorizonDraw) * bsdf_sample_pdf(drawn_from, wo);
+    if (!(pdf > 0.0f)) return glm::vec3(0.0f);
+    SurfacePoint seen = s;
+    seen.shading_normal = exit_normal(s, wo);
+    const Bsdf from_exit = shade(scene, seen, wo);
+    const glm::vec3 f = bsdf_eval(from_exit, b.wo, LobeSet::all, b.sampled_estimate);
+    return f * (photon_arrival_ratio(seen.shading_normal, s.geometric_normal, b.wo) * cos_g / pdf);
+}
+
 // A photon's weight across Multiscatter GGX glass (or a material holding it) straight from its light. A camera path
 // that reaches this glass finds that light two ways, and Cycles 3.4 weighs them by the power heuristic with the
 // density the glass reports (mf_glass_pdf): by sampling the light, valued by its own evaluation walk, which is not
@@ -167,11 +199,11 @@ glm::vec3 weight_blended_towards_light(const Scene& scene, const SurfacePoint& s
 // Cycles' bump shadowing term (bump_shadowing.h) on a photon that arrives at s along wi and scatters off its diffuse
 // parts: the term of wi, the light's direction, for the normal the camera path going the other way would shade
 // with. That normal is tilted by Cycles' ensure_valid_reflection against where that path comes from, the way the
-// photon leaves, not against wi as s's is (surface_at tilts it against the photon's arrival): on a smooth mesh
-// without a program's normal, whose tilt is all there is, the camera path's normal is mostly the interpolated one
-// and the term 1 (an 80-face smooth sphere came out 0.944-1.006 of Cycles in its blocks with the term of the
-// arrival's tilt, 0.974-1.024 without). Where a program (Bump, Normal Map) makes the normal, that normal is the
-// one, tilted against wi as the photon sees it.
+// photon leaves, not against wi as s's is (surface_at tilts it against the photon's arrival). A smooth mesh without
+// a program's normal scatters as seen from where the photon leaves (scatters_as_seen_from_exit), whose normal and
+// term that scatter takes; taking the term of the arrival's tilt had darkened an 80-face smooth sphere (0.944-1.006
+// of Cycles in its blocks, 0.974-1.024 without). Where a program (Bump, Normal Map) makes the normal, that normal
+// is the one, tilted against wi as the photon sees it.
 float photon_bump_shadowing(const Scene& scene, const SurfacePoint& s, const glm::vec3& wi) {
     if (!s.material->program_normal || !bump_shadowed(s.smooth_normal, s.shading_normal)) return 1.0f;
     return bump_shadowing_term(scene.bump_shadowing(*s.material), s.smooth_normal, s.shading_normal, wi);
@@ -274,6 +306,19 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             if (!(keep > 0.0f) || rng.uniform() >= keep) return;
             power *= albedo / keep;
             const float v1 = rng.uniform(), v2 = rng.uniform();
+            if (scatters_as_seen_from_exit(s)) {
+                // Drawn against the triangle, (n_g·ω_o)/π: f (n_c·ω_i)/(n_g·ω_i) (n_g·ω_o) / pdf is the albedo times
+                // the arrival ratio of the normal n_c the camera path coming along ω_o shades with, and Cycles' bump
+                // shadowing term of ω_i where n_c is tilted (as shade() gives a view sample there).
+                const glm::vec3 direction = sample_cosine_hemisphere(s.geometric_normal, v1, v2);
+                if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;
+                const glm::vec3 nc = exit_normal(s, direction);
+                power *= photon_arrival_ratio(nc, s.geometric_normal, -ray.direction);
+                if (bump_shadowed(s.smooth_normal, nc))
+                    power *= bump_shadowing_term(scene.bump_shadowing(m), s.smooth_normal, nc, -ray.direction);
+                ray = Ray{offset_ray_origin(s.position, s.geometric_normal, s.rounding_scale), direction};
+                continue;
+            }
             const glm::vec3 direction = sample_cosine_hemisphere(s.shading_normal, v1, v2);
             if (!(glm::dot(direction, s.geometric_normal) > 0.0f)) return;  // shading normal pointed below
             power *= shading_normal_ratios(s, -ray.direction, direction);
@@ -309,7 +354,20 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             drawn_from.lobe_count = halfway.lobe_count;
             std::copy(halfway.lobes, halfway.lobes + halfway.lobe_count, drawn_from.lobes);
         }
-        const BsdfSample step = bsdf_sample(drawn_from, u0, u1, u2);
+        // On a smooth mesh the camera path's normal depends on where it comes from (photon_shading_normals.h):
+        // a share kHorizonDraw of the scatters draws ω_o against the triangle instead, so that every direction
+        // above it, where Cycles' camera paths arrive from, is drawn, and a reflection by the lobes is weighed
+        // by the mixture's density (weight_seen_along_exit_normal).
+        const bool exit_normals = scatters_as_seen_from_exit(s) && !bsdf_has_multi_ggx_glass(b) &&
+                                  bsdf_has(b, LobeSet::reflection);
+        BsdfSample step;
+        if (exit_normals && rng.uniform() < kHorizonDraw) {
+            step.kind = ScatterKind::lobes;
+            step.direction = sample_cosine_hemisphere(s.geometric_normal, u1, u2);
+        } else {
+            step = bsdf_sample(drawn_from, u0, u1, u2);
+            if (exit_normals) step.weight /= 1.0f - kHorizonDraw;  // what only this draw reaches
+        }
         if (step.kind == ScatterKind::none) return;
         if (step.kind == ScatterKind::lobes && lobes_to_copy) return;
         if (role == LineRole::line_copy && direct && step.kind != ScatterKind::lobes) return;  // the ordinary path's
@@ -342,9 +400,12 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         const bool blended = direct && step.kind == ScatterKind::lobes && source.sources != nullptr &&
                              scene.multiscatter_light_estimate() == MultiScatterEstimate::light_sample &&
                              bsdf_has_multi_ggx_glass(b);
-        const bool seen_from_exit = blended || (view_weighted && step.kind == ScatterKind::lobes);
+        const bool along_exit_normal = exit_normals && step.kind == ScatterKind::lobes && !step.transmitted;
+        const bool seen_from_exit = blended || along_exit_normal || (view_weighted && step.kind == ScatterKind::lobes);
         if (blended)
             step_weight = weight_blended_towards_light(scene, s, b, step, source);
+        else if (along_exit_normal)
+            step_weight = weight_seen_along_exit_normal(scene, s, b, drawn_from, step.direction);
         else if (seen_from_exit)
             step_weight = weight_seen_from_exit(scene, s, b, step);
         if (step.kind != ScatterKind::transparent) {
@@ -356,7 +417,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         const float keep = std::min(1.0f, std::max({step_weight.x, step_weight.y, step_weight.z}));
         if (!(keep > 0.0f) || rng.uniform() >= keep) return;
         power *= step_weight * ((seen_from_exit ? 1.0f : photon_units_across(b, step)) / keep);
-        if (step.kind != ScatterKind::transparent) power *= shading_normal_ratios(s, -ray.direction, step.direction);
+        if (step.kind != ScatterKind::transparent && !along_exit_normal)
+            power *= shading_normal_ratios(s, -ray.direction, step.direction);
         if (step.kind == ScatterKind::lobes && !(glm::dot(step.direction, step.transmitted ? -s.geometric_normal
                                                                                             : s.geometric_normal) > 0.0f))
             return;

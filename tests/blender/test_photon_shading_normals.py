@@ -121,3 +121,57 @@ def test_bounced_light_on_a_bump_mapped_floor_as_the_reference(empty_scene, tmp_
           f"{np.round(ratios, 3)}")
     assert abs(ours.mean() / reference[..., :3].mean() - 1.0) < 0.02
     assert np.all(np.abs(ratios - 1.0) < 0.07)
+
+
+def lone_smooth_suzanne(scene):
+    """Blender's Suzanne (500 faces, smooth-shaded, Lambert) alone under a point light: the light it receives
+    beyond the lamp's is what its brows, eyes, ears and cheeks pass between them, at grazing angles."""
+    scene.world = bpy.data.worlds.new("Black")
+    scene.world.color = (0.0, 0.0, 0.0)
+    bpy.ops.mesh.primitive_monkey_add(size=2.0, rotation=(0.4, 0.0, 0.0))
+    bpy.ops.object.shade_smooth()
+    bpy.context.active_object.data.materials.append(diffuse_material("Suzanne", 0.8))
+    bpy.ops.object.light_add(type='POINT', location=(1.5, -3.0, 2.5))
+    lamp = bpy.context.active_object
+    lamp.data.energy = 1000.0
+    lamp.data.shadow_soft_size = 0.0
+    bpy.ops.object.camera_add(location=(0.0, -6.0, 0.0), rotation=(1.5708, 0.0, 0.0))
+    scene.camera = bpy.context.active_object
+    scene.camera.data.lens = 60
+    return scene
+
+
+def test_light_a_smooth_suzanne_passes_between_its_parts_as_cycles(empty_scene, tmp_path, core):
+    """Cycles shades a smooth surface with its normal tilted against where the camera path comes from
+    (photon_shading_normals.h, exit_normal): a photon leaving one part of Suzanne for another scatters as that
+    path sees the surface. Cycles' indirect light is its image at 16 bounces less its image at none (a point light:
+    no light is found by BSDF rays, so the second is all of its direct light); Photon Splat's is its Indirect pass.
+    With the normal tilted against the photon's arrival, and its directions drawn above that normal only, Photon
+    Splat had 0.69 of Cycles 3.4's indirect light here (0.86 now), and 0.63 of 4.5's (0.80 now). The reference
+    renderer has 0.994 of Cycles 3.4's. What Photon Splat still lacks is the kernel's bias in Suzanne's crevices
+    (it shrinks with the radius) and the cap on the ratios near a horizon (kMaxShadingNormalRatio). Blender 4.x no
+    longer tilts a diffuse closure's normal at all (svm/closure.h: only specular ones, and only with Bump Map
+    Correction), which the core does not follow yet, on camera paths either (docs/blender-versions.md)."""
+    from photonsplat import export
+    scene = lone_smooth_suzanne(empty_scene)
+    images = []
+    for bounces in (16, 0):
+        use_cycles(scene, SIZE, bounces, samples=1024)
+        scene.cycles.light_sampling_threshold = 0.0
+        scene.cycles.pixel_filter_type = 'BOX'
+        scene.cycles.filter_width = 1.0
+        images.append(render_pixels(tmp_path / f"cycles_{bounces}.exr")[..., :3].astype(np.float64))
+    cycles_indirect = images[0] - images[1]
+    scene.render.engine = 'PHOTONSPLAT'
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    settings = frame.settings
+    settings.photons, settings.max_bounces, settings.threads, settings.seed = 100_000, 16, 2, 1
+    progressive = core.Progressive(frame.scene, frame.camera, settings)
+    for _ in range(64):
+        progressive.step()
+    ours = np.asarray(progressive.passes()["indirect"])[..., :3].astype(np.float64)
+    ratio = ours.sum() / cycles_indirect.sum()
+    print(f"\nsmooth Suzanne's indirect light, Photon Splat / Cycles: {ratio:.4f} (Cycles' indirect is "
+          f"{cycles_indirect.sum() / images[0].sum():.3f} of its image)")
+    low = 0.8 if bpy.app.version < (4, 0, 0) else 0.75
+    assert low < ratio < 1.1
