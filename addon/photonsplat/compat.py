@@ -31,6 +31,22 @@ def corner_normals_are_vertex_normals(mesh):
     return bool(smooth.all())
 
 
+def triangles_shaded_flat(mesh):
+    """Which loop triangles Cycles shades with the triangle's own normal: a bool array, or None where none is.
+    Blender 4.1+ (Mesh.normals_domain): every triangle of a 'FACE' mesh (all faces flat, no sharp edges or custom
+    normals), none otherwise (a 'CORNER' mesh's flat faces take their corner normals, the polygon's normal). Blender
+    3.x: the triangles of flat faces, unless Auto Smooth or custom normals make Cycles shade every face by its split
+    normals. A flat quad that is not planar has a polygon normal that is neither of its triangles' own."""
+    domain = getattr(mesh, "normals_domain", None)
+    if domain is not None:
+        return np.ones(len(mesh.loop_triangles), dtype=bool) if domain == 'FACE' else None
+    if mesh.use_auto_smooth or mesh.has_custom_normals:
+        return None
+    smooth = np.empty(len(mesh.loop_triangles), dtype=bool)
+    mesh.loop_triangles.foreach_get("use_smooth", smooth)
+    return None if smooth.all() else ~smooth
+
+
 def prepare_corner_normals(mesh):
     """Make loop_triangles' split_normals valid. Blender 3.4 computes them on request only
     (Mesh.calc_normals_split, removed in 4.1, where corner normals are always up to date)."""

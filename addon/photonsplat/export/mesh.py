@@ -83,6 +83,20 @@ def triangle_mesh(ob_eval, needs=MeshNeeds()):
         ob_eval.to_mesh_clear()
 
 
+def _take_triangle_normals(normals, vertices, triangles, flat):
+    """Give the corners of the `flat` triangles their triangle's own normal (unit, by the corners' winding), as
+    Cycles shades a flat face; the core then takes them as flat-shaded (photon_shading_normals.h). A degenerate
+    triangle keeps its split normals."""
+    corners = vertices[triangles[flat]].astype(np.float64)
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(cross, axis=1)
+    usable = length > 0.0
+    unit = np.zeros_like(cross)
+    unit[usable] = cross[usable] / length[usable, None]
+    rows = np.flatnonzero(flat)[usable]
+    normals[rows] = unit[usable, None, :].astype(np.float32)
+
+
 def _from_mesh(mesh, needs=MeshNeeds()):
     mesh.calc_loop_triangles()
     count = len(mesh.loop_triangles)
@@ -109,6 +123,9 @@ def _from_mesh(mesh, needs=MeshNeeds()):
         normals = np.empty(count * 9, dtype=np.float32)
         mesh.loop_triangles.foreach_get("split_normals", normals)
         normals = normals.reshape(-1, 3, 3)
+        flat = compat.triangles_shaded_flat(mesh)
+        if flat is not None:
+            _take_triangle_normals(normals, vertices.reshape(-1, 3), triangles.reshape(-1, 3), flat)
 
     result = TriangleMesh(vertices=vertices.reshape(-1, 3), triangles=triangles.reshape(-1, 3), normals=normals,
                           slots=slots, uvs=_corner_uvs(mesh, count) if needs.uvs else None, uvs_read=needs.uvs)
