@@ -51,3 +51,26 @@ def test_a_flat_shaded_suzanne_is_lit_by_its_triangles_normals_as_in_cycles(empt
           f"{np.mean(np.abs(ratios - 1.0) > 0.05):.3f} of them more than 5 % off")
     assert abs(ours.sum() / cycles.sum() - 1.0) < 0.01
     assert np.mean(np.abs(ratios - 1.0) > 0.05) < 0.05
+
+
+def test_triangle_normals_are_taken_in_chunks(monkeypatch):
+    """_take_triangle_normals in steps of a few triangles gives every flat triangle its own unit normal, leaves the
+    others and a degenerate one as they were."""
+    from photonsplat.export import mesh as export_mesh
+    rng = np.random.default_rng(1)
+    vertices = rng.normal(size=(50, 3)).astype(np.float32)
+    triangles = np.array([rng.choice(50, 3, replace=False) for _ in range(40)], dtype=np.int32)
+    triangles[6] = (5, 5, 9)                       # no area
+    flat = np.ones(40, dtype=bool)
+    flat[::4] = False
+    normals = np.full((40, 3, 3), 7.0, dtype=np.float32)
+    monkeypatch.setattr(export_mesh, "FLAT_NORMALS_CHUNK", 7)
+    export_mesh._take_triangle_normals(normals, vertices, triangles, flat)
+    corners = vertices[triangles].astype(np.float64)
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    for t in range(40):
+        if flat[t] and t != 6:
+            expected = cross[t] / np.linalg.norm(cross[t])
+            assert np.allclose(normals[t], expected[None, :], atol=1e-6), t
+        else:
+            assert np.all(normals[t] == 7.0), t

@@ -83,18 +83,21 @@ def triangle_mesh(ob_eval, needs=MeshNeeds()):
         ob_eval.to_mesh_clear()
 
 
+FLAT_NORMALS_CHUNK = 1 << 16  # triangles a step of _take_triangle_normals takes (5 MB of float64 corners)
+
+
 def _take_triangle_normals(normals, vertices, triangles, flat):
     """Give the corners of the `flat` triangles their triangle's own normal (unit, by the corners' winding), as
     Cycles shades a flat face; the core then takes them as flat-shaded (photon_shading_normals.h). A degenerate
     triangle keeps its split normals."""
-    corners = vertices[triangles[flat]].astype(np.float64)
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    length = np.linalg.norm(cross, axis=1)
-    usable = length > 0.0
-    unit = np.zeros_like(cross)
-    unit[usable] = cross[usable] / length[usable, None]
-    rows = np.flatnonzero(flat)[usable]
-    normals[rows] = unit[usable, None, :].astype(np.float32)
+    rows = np.flatnonzero(flat)
+    for start in range(0, len(rows), FLAT_NORMALS_CHUNK):  # in chunks: a few MB at a time for any mesh
+        chunk = rows[start:start + FLAT_NORMALS_CHUNK]
+        corners = vertices[triangles[chunk]].astype(np.float64)
+        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        length = np.linalg.norm(cross, axis=1)
+        usable = length > 0.0
+        normals[chunk[usable]] = (cross[usable] / length[usable, None])[:, None, :].astype(np.float32)
 
 
 def _from_mesh(mesh, needs=MeshNeeds()):
