@@ -1,5 +1,6 @@
 #include "photonsplat/lights.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <glm/geometric.hpp>
@@ -234,6 +235,7 @@ void mark_facing_disc(const Light& light, EmissionSample& out) {
     if (light.radius > 0.0f && !light.sphere) {
         out.disc_centre = light.position;
         out.disc_radius = light.radius;
+        if (light.kind == LightKind::spot) out.disc_spot = &light;
     }
 }
 
@@ -329,10 +331,11 @@ LightHit intersect_light(const Light& light, const glm::vec3& x, const glm::vec3
                 return out;
             }
             // The disc of sample_light_incidence: centred on the light, facing x, radiance I/(πR²) (a spot's
-            // times its cone's attenuation towards x).
+            // times its cone's attenuation towards x). From x within the light's radius too, as Cycles 3.4's
+            // ray_disk_intersect: its light samples reach x from that disc, and its BSDF rays meet it.
             const glm::vec3 from_light = x - light.position;
             const float d = glm::length(from_light);
-            if (!(d > light.radius)) return out;  // x inside the light: it samples no disc either
+            if (!(d > 0.0f)) return out;  // x at the centre: no disc faces it
             const glm::vec3 axis = from_light / d;
             const float cos_light = -glm::dot(direction, axis);
             if (!(cos_light > 0.0f)) return out;
@@ -397,14 +400,17 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
     out.power = light_flux(light, scene_radius);
     switch (light.kind) {
         case LightKind::point: {
-            if (light.radius > 0.0f) {
+            if (is_sphere_light(light)) {
                 // A spherical emitter: uniform on the surface, cosine-weighted outwards; isotropic from afar.
                 const glm::vec3 n = sample_uniform_sphere(u1, u2);
                 out.origin = light.position + light.radius * n;
                 out.direction = sample_cosine_hemisphere(n, u3, u4);
             } else {
-                out.origin = light.position;
+                // Isotropic; a soft light's photon leaves the disc across its direction (soft_light_origin), which
+                // reaches the receivers within its radius too (first_hit_falloff).
                 out.direction = sample_uniform_sphere(u1, u2);
+                out.origin = light.radius > 0.0f ? soft_light_origin(light, out.direction, false, u3, u4)
+                                                 : light.position;
             }
             mark_facing_disc(light, out);
             break;
@@ -444,11 +450,97 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
     return out;
 }
 
-float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x) {
+namespace {
+
+// The projected solid angle (∫ cos⁺ dω over the horizon of the unit normal n) of a disc that faces the receiver,
+// seen under the angular radius α around the unit direction u. Where the disc lies wholly above the horizon it is
+// π sin²α cos θ (θ between u and n); where it crosses the horizon, the disc is a polygon of its area, clipped
+// by the tangent plane, whose projected solid angle is Lambert's sum over its edges (each edge's angle times the
+// cosine between n and the normal of the plane it spans with the receiver).
+float facing_disc_projected_solid_angle(float cos_alpha, float sin_alpha, const glm::vec3& u, const glm::vec3& n) {
+    const float cos_theta = glm::dot(u, n);
+    if (cos_theta >= sin_alpha) return kPi * sin_alpha * sin_alpha * cos_theta;
+    if (-cos_theta >= sin_alpha) return 0.0f;
+    constexpr int kEdges = 48;
+    // The polygon's vertices a little outside the circle, so that its area is the disc's.
+    const float spread = sin_alpha * std::sqrt(2.0f * kPi / (kEdges * std::sin(2.0f * kPi / kEdges)));
+    glm::vec3 b1, b2;
+    orthonormal_basis(u, b1, b2);
+    glm::vec3 clipped[kEdges * 2];
+    int count = 0;
+    const auto vertex = [&](int k) {
+        const float phi = 2.0f * kPi * static_cast<float>(k % kEdges) / kEdges;
+        return cos_alpha * u + spread * (std::cos(phi) * b1 + std::sin(phi) * b2);
+    };
+    for (int k = 0; k < kEdges; ++k) {
+        const glm::vec3 a = vertex(k), b = vertex(k + 1);
+        const float da = glm::dot(a, n), db = glm::dot(b, n);
+        if (da >= 0.0f) clipped[count++] = a;
+        if ((da >= 0.0f) != (db >= 0.0f)) clipped[count++] = a + (da / (da - db)) * (b - a);
+    }
+    float sum = 0.0f;
+    for (int k = 0; k < count; ++k) {
+        const glm::vec3 a = glm::normalize(clipped[k]), b = glm::normalize(clipped[(k + 1) % count]);
+        const glm::vec3 c = glm::cross(a, b);
+        const float s = glm::length(c);
+        if (s > 0.0f) sum += std::atan2(s, glm::dot(a, b)) * glm::dot(c, n) / s;
+    }
+    return count >= 3 ? 0.5f * std::fabs(sum) : 0.0f;
+}
+
+// The same over the cone of directions within α of u, each weighed by the spot's attenuation along the light's
+// travel (−ω): a midpoint rule in (cos β, φ), which is uniform in solid angle.
+float spot_cone_projected_solid_angle(const Light& spot, float cos_alpha, const glm::vec3& u, const glm::vec3& n) {
+    constexpr int kRings = 16, kSectors = 32;
+    glm::vec3 b1, b2;
+    orthonormal_basis(u, b1, b2);
+    float sum = 0.0f;
+    for (int i = 0; i < kRings; ++i) {
+        const float cos_beta = cos_alpha + (1.0f - cos_alpha) * (i + 0.5f) / kRings;
+        const float sin_beta = std::sqrt(std::max(0.0f, 1.0f - cos_beta * cos_beta));
+        for (int j = 0; j < kSectors; ++j) {
+            const float phi = 2.0f * kPi * (j + 0.5f) / kSectors;
+            const glm::vec3 w = cos_beta * u + sin_beta * (std::cos(phi) * b1 + std::sin(phi) * b2);
+            const float cosine = glm::dot(w, n);
+            if (cosine > 0.0f) sum += cosine * spot.spot_attenuation(-w);
+        }
+    }
+    return sum * (1.0f - cos_alpha) * 2.0f * kPi / (kRings * kSectors);
+}
+
+}  // namespace
+
+float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x, const glm::vec3& normal) {
     if (!(emitted.disc_radius > 0.0f)) return 1.0f;
-    const glm::vec3 to_x = x - emitted.disc_centre;
-    const float d2 = glm::dot(to_x, to_x), r2 = emitted.disc_radius * emitted.disc_radius;
-    return d2 / (d2 + r2);
+    const glm::vec3 to_centre = emitted.disc_centre - x;
+    const float d2 = glm::dot(to_centre, to_centre), r2 = emitted.disc_radius * emitted.disc_radius;
+    const float nn = glm::dot(normal, normal);
+    if (!(d2 > 0.0f) || !(nn > 0.0f)) return 0.0f;
+    const float d = std::sqrt(d2);
+    const glm::vec3 u = to_centre / d;
+    // The side of the surface the photon arrives on.
+    const glm::vec3 n = (glm::dot(normal, emitted.direction) > 0.0f ? -normal : normal) / std::sqrt(nn);
+    // Both emitters are of the light's radiance: the ratio of what each shows the receiver is the ratio of light.
+    // Cycles' disc is the cone of directions within atan(R/d) of the centre; the photons', within asin(R/d), or
+    // the centre's half of all directions from within the radius.
+    if (emitted.disc_spot != nullptr && d2 < 16.0f * r2) {
+        const Light& spot = *emitted.disc_spot;
+        const float cycles = spot_cone_projected_solid_angle(spot, d / std::sqrt(d2 + r2), u, n);
+        const float photons =
+            spot_cone_projected_solid_angle(spot, d2 > r2 ? std::sqrt(1.0f - r2 / d2) : 0.0f, u, n);
+        return photons > 0.0f ? std::min(1.0f, cycles / photons) : 0.0f;
+    }
+    const float dr = std::sqrt(d2 + r2);
+    const float cycles = facing_disc_projected_solid_angle(d / dr, emitted.disc_radius / dr, u, n);
+    float photons;
+    if (d2 > r2) {
+        const float sin_alpha = emitted.disc_radius / d;
+        photons = facing_disc_projected_solid_angle(std::sqrt(1.0f - sin_alpha * sin_alpha), sin_alpha, u, n);
+    } else {
+        photons = 0.5f * kPi * (1.0f + glm::dot(u, n));
+    }
+    if (!(photons > 0.0f)) return 0.0f;
+    return std::min(1.0f, cycles / photons);
 }
 
 bool light_can_aim(const Light& light) {
@@ -486,8 +578,7 @@ EmissionSample emission_along(const Light& light, const glm::vec3& anchor, const
     switch (light.kind) {
         case LightKind::point: {
             out.power = light_flux(light, 0.0f);
-            // A soft point light emits photons from a sphere whether it is lit as a sphere or as Cycles 3.4's disc.
-            if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, true, u3, u4);
+            if (light.radius > 0.0f) out.origin = soft_light_origin(light, direction, light.sphere, u3, u4);
             mark_facing_disc(light, out);
             break;
         }

@@ -285,7 +285,7 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
             continue;
         }
         const SurfacePoint s = surface_at(scene, ray, hit, ShaderRay::photon);
-        if (vertex == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
+        if (vertex == 0) power *= first_hit_falloff(emitted, s.position, s.geometric_normal);  // a soft light's disc (lights.h)
         const Material& m = *s.material;
         if (!m.has_delta && !m.has_lobes) return;  // absorbed (black, holdout)
         // A shadowless light's photon still direct beyond transparency: this surface's lobes are its copy's.

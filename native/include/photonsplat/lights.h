@@ -95,17 +95,23 @@ struct EmissionSample {
     // first_hit_falloff. disc_radius 0: any other light.
     glm::vec3 disc_centre{0.0f};
     float disc_radius = 0.0f;
+    const Light* disc_spot = nullptr;  // the spot whose disc it is (its cone weighs each direction), else null
 };
 EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_center, float scene_radius,
                                      float u1, float u2, float u3, float u4);
 
-// What an emitted photon's power keeps at its first hit x. The disc of radius R that Cycles 3.4 (and 4.x with Soft
-// Falloff on) turns towards each receiver gives a point at distance d from its centre I/(d² + R²) where a point
-// or a sphere gives I/d² (on the disc's axis: L π R²/(d² + R²) with L = I/(πR²)); direct light samples that disc
-// (sample_light_incidence), so photons, which leave as from a point or sphere, take d²/(d² + R²) where they first
-// land. 1 for every other light. Found by the differential scenes (seed 150: a room under two soft point lights of
-// radius 0.15 and 0.21 was 5 % too bright with Lambert walls, exact with radius 0).
-float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x);
+// What an emitted photon's power keeps at its first hit x, on a surface of normal `normal` (either side). The disc
+// of radius R that Cycles 3.4 (and 4.x with Soft Falloff on) turns towards each receiver, of radiance L = I/(πR²),
+// lights x with L times the projected solid angle of that disc above x's horizon: I cos θ/(d² + R²) where the
+// disc lies wholly above it (d from x to its centre), not the I cos θ/d² of a point. Photons leave the disc across
+// their direction (a sphere's silhouette from outside it; from within the radius, every direction on the centre's
+// side), of the same radiance, so they take the ratio of the two projected solid angles: d²/(d² + R²) from afar,
+// less where a disc crosses x's horizon or x lies within the radius. A spot's cone weighs each direction of both
+// (by quadrature within four radii of the light, where the two differ in their directions). 1 for every other light. Found by the
+// differential scenes: seed 150 (a room under two soft point lights of radius 0.15 and 0.21 was 5 % too bright
+// with Lambert walls, exact with radius 0) and seed 15 (a point light of radius 0.86, 0.38 under a ceiling: the
+// ceiling within its radius got no photons from the sphere they then left, the bounced light 7 % short).
+float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x, const glm::vec3& normal);
 
 // The same emission with the direction chosen by the caller (photons aimed at mirrors and glass,
 // caustic_aim.h). Point, spot and area lights only. Their photons leave an anchor: the centre of a point or

@@ -99,7 +99,7 @@ std::vector<Photon> trace_caustic_photons(const Scene& scene, const LightSources
                     --bounce;  // not a bounce
                     continue;
                 }
-                if (bounce == 0) power *= first_hit_falloff(emitted, s.position);  // a soft light's disc (lights.h)
+                if (bounce == 0) power *= first_hit_falloff(emitted, s.position, s.geometric_normal);  // a soft light's disc (lights.h)
                 const Bsdf b = shade(scene, s, -ray.direction);
                 // L D: direct light, the path tracer's. L S+ D: a caustic photon, ours, stored where the surface
                 // has parts other than deltas (a path's vertex on either side gathers it: trace_reference_path);
