@@ -98,13 +98,16 @@ CAUSTIC_SEEDS = {
 CAUSTIC_TOLERANCE = 0.10
 # The scene whose floor carries a clearcoat under a spot light (test_a_clearcoat_follows_cycles_light_pick).
 CLEARCOAT_SEED = 153
+# The room whose point light of radius 0.86 hangs 0.38 under its ceiling (test_a_soft_light_lights_what_lies_within_
+# its_radius_as_cycles_disc).
+SOFT_LIGHT_SEED = 15
 
 
 @pytest.fixture(scope="module")
 def scenes(tmp_path_factory):
     """The sample's .blend files, drawn by the generator in a Blender of its own (it starts from factory settings)."""
     folder = tmp_path_factory.mktemp("random_scenes")
-    seeds = ",".join(str(s) for s in set(SAMPLE) | set(CAUSTIC_SEEDS) | {CLEARCOAT_SEED})
+    seeds = ",".join(str(s) for s in set(SAMPLE) | set(CAUSTIC_SEEDS) | {CLEARCOAT_SEED, SOFT_LIGHT_SEED})
     subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "-noaudio", "--python",
                     str(REPO / "blend_scenes" / "make_random_scenes.py"), "--", str(folder), "--seeds", seeds,
                     "--size", "64x64"], check=True, stdout=subprocess.DEVNULL)
@@ -222,6 +225,38 @@ def test_a_clearcoat_follows_cycles_light_pick(scenes, core):
     for k in (1, 2):
         assert alone[k] / alone[0] == pytest.approx(1.0, abs=0.01)
         assert with_lamp[k] / with_lamp[0] == pytest.approx(1.0, abs=0.01)
+
+
+def test_a_soft_light_lights_what_lies_within_its_radius_as_cycles_disc(scenes, core):
+    """Cycles 3.4 lights each receiver of a soft point light from the disc of its radius turned towards it, the
+    receivers within the radius too, whose BSDF rays meet that disc (ray_disk_intersect). Seed 15's room under its
+    point light of radius 0.86, 0.38 under the ceiling, its other light hidden: the reference refused BSDF rays from
+    within the radius (0.972 of Cycles), and photons left the light's sphere, which the ceiling cuts, so that the
+    ceiling within the radius got none (0.964; the whole scene 0.981). Direct light alone agreed (1.000)."""
+    import make_random_scenes
+    from closure_gallery import render_exr, use_cycles_oracle
+    from photonsplat import export
+    blend = scenes / f"random_{SOFT_LIGHT_SEED}.blend"
+    bpy.ops.wm.open_mainfile(filepath=str(blend), load_ui=False)
+    scene = bpy.context.scene
+    make_random_scenes.canonical(scene, json.loads(scene["differential"]))
+    other = bpy.data.objects["Light1"]
+    other.hide_render = other.hide_viewport = True
+    use_cycles_oracle(scene, CYCLES_SAMPLES, 1, 2)
+    cycles = render_exr(scene, blend.with_suffix(".soft.exr"))[..., :3].mean()
+    scene.render.engine = 'PHOTONSPLAT'
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    reference = np.asarray(core.render_reference(frame.scene, frame.camera, samples=64, seed=1, threads=2,
+                                                 max_bounces=16)[0])[..., :3].mean()
+    settings = frame.settings
+    settings.iterations, settings.max_bounces, settings.threads, settings.seed = ITERATIONS, 16, 2, 1
+    progressive = core.Progressive(frame.scene, frame.camera, settings)
+    for _ in range(ITERATIONS):
+        progressive.step()
+    photonsplat = np.asarray(progressive.image())[..., :3].mean()
+    print(f"\nreference {reference / cycles:.4f} of Cycles, Photon Splat {photonsplat / cycles:.4f}")
+    assert reference / cycles == pytest.approx(1.0, abs=0.012)
+    assert photonsplat / cycles == pytest.approx(1.0, abs=0.02)
 
 
 @pytest.mark.parametrize("world_only", [True, False])
