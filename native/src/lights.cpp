@@ -488,24 +488,32 @@ float facing_disc_projected_solid_angle(float cos_alpha, float sin_alpha, const 
     return count >= 3 ? 0.5f * std::fabs(sum) : 0.0f;
 }
 
-// The same over the cone of directions within α of u, each weighed by the spot's attenuation along the light's
-// travel (−ω): a midpoint rule in (cos β, φ), which is uniform in solid angle.
-float spot_cone_projected_solid_angle(const Light& spot, float cos_alpha, const glm::vec3& u, const glm::vec3& n) {
-    constexpr int kRings = 16, kSectors = 32;
+// The same for a spot's two cones about u at once, each direction weighed by the spot's attenuation along the
+// light's travel (−ω): Cycles' disc within cos_cycles of u, the photons' directions within cos_photons (wider). One
+// midpoint rule in (cos β, φ), uniform in solid angle, whose rings meet at the inner cone's edge, so that the two
+// sums share their points and most of their error.
+void spot_cones_projected_solid_angles(const Light& spot, float cos_cycles, float cos_photons, const glm::vec3& u,
+                                       const glm::vec3& n, float& cycles, float& photons) {
+    constexpr int kInnerRings = 6, kOuterRings = 4, kSectors = 16;
     glm::vec3 b1, b2;
     orthonormal_basis(u, b1, b2);
-    float sum = 0.0f;
-    for (int i = 0; i < kRings; ++i) {
-        const float cos_beta = cos_alpha + (1.0f - cos_alpha) * (i + 0.5f) / kRings;
+    const auto ring = [&](float cos_beta) {
         const float sin_beta = std::sqrt(std::max(0.0f, 1.0f - cos_beta * cos_beta));
+        float sum = 0.0f;
         for (int j = 0; j < kSectors; ++j) {
             const float phi = 2.0f * kPi * (j + 0.5f) / kSectors;
             const glm::vec3 w = cos_beta * u + sin_beta * (std::cos(phi) * b1 + std::sin(phi) * b2);
             const float cosine = glm::dot(w, n);
             if (cosine > 0.0f) sum += cosine * spot.spot_attenuation(-w);
         }
-    }
-    return sum * (1.0f - cos_alpha) * 2.0f * kPi / (kRings * kSectors);
+        return sum * 2.0f * kPi / kSectors;
+    };
+    float inner = 0.0f, outer = 0.0f;
+    for (int i = 0; i < kInnerRings; ++i) inner += ring(cos_cycles + (1.0f - cos_cycles) * (i + 0.5f) / kInnerRings);
+    for (int i = 0; i < kOuterRings; ++i)
+        outer += ring(cos_photons + (cos_cycles - cos_photons) * (i + 0.5f) / kOuterRings);
+    cycles = inner * (1.0f - cos_cycles) / kInnerRings;
+    photons = cycles + outer * (cos_cycles - cos_photons) / kOuterRings;
 }
 
 }  // namespace
@@ -523,11 +531,10 @@ float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x, const
     // Both emitters are of the light's radiance: the ratio of what each shows the receiver is the ratio of light.
     // Cycles' disc is the cone of directions within atan(R/d) of the centre; the photons', within asin(R/d), or
     // the centre's half of all directions from within the radius.
-    if (emitted.disc_spot != nullptr && d2 < 16.0f * r2) {
-        const Light& spot = *emitted.disc_spot;
-        const float cycles = spot_cone_projected_solid_angle(spot, d / std::sqrt(d2 + r2), u, n);
-        const float photons =
-            spot_cone_projected_solid_angle(spot, d2 > r2 ? std::sqrt(1.0f - r2 / d2) : 0.0f, u, n);
+    if (emitted.disc_spot != nullptr && d2 < 4.0f * r2) {
+        float cycles, photons;
+        spot_cones_projected_solid_angles(*emitted.disc_spot, d / std::sqrt(d2 + r2),
+                                          d2 > r2 ? std::sqrt(1.0f - r2 / d2) : 0.0f, u, n, cycles, photons);
         return photons > 0.0f ? std::min(1.0f, cycles / photons) : 0.0f;
     }
     const float dr = std::sqrt(d2 + r2);

@@ -413,7 +413,7 @@ TEST(Cycles4Lights, DiscLightPhotonsLightSurfacesWithinItsRadiusAsShadowRaysDo) 
     // radius got none (0.2 of the light under the centre), its bounced light 7 % short. They leave the disc across
     // their direction now and take the ratio of what the two emitters show each receiver (first_hit_falloff).
     // A wall beside the light (its normal across the light's) is the horizon's other case; a spot's disc the same.
-    const float radius = 0.86f, gap = 0.38f, rho = 0.1f;
+    const float radius = 0.86f, gap = 0.38f;
     // A spot's cone weighs each direction: a wide one and one of 69° whose edge crosses the patches' views.
     Light wide = spot_light(3.0f, 0.0f, true), narrow = spot_light(1.2f, 0.15f, true);
     for (Light* spot : {&wide, &narrow}) {
@@ -422,6 +422,7 @@ TEST(Cycles4Lights, DiscLightPhotonsLightSurfacesWithinItsRadiusAsShadowRaysDo) 
     }
     struct Patch {
         glm::vec3 centre, normal, along_u, along_v;
+        float rho = 0.1f;  // half its side
     };
     const Patch patches[] = {
         {{0.0f, 0.0f, gap}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}},   // above the centre, within the radius
@@ -429,28 +430,36 @@ TEST(Cycles4Lights, DiscLightPhotonsLightSurfacesWithinItsRadiusAsShadowRaysDo) 
         {{0.9f, 0.0f, gap}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}},   // just outside it: the disc crosses the horizon
         {{1.6f, 0.0f, gap}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}},   // farther: the disc still crosses it
         {{0.7f, 0.0f, 0.0f}, {-1, 0, 0}, {0, 1, 0}, {0, 0, 1}},  // a wall within the radius, level with the centre
+        {{0.0f, 0.0f, 2.0f}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, 0.25f},  // a higher ceiling, beyond two radii:
+        {{1.3f, 0.0f, 2.0f}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, 0.25f},  // the 69° spot's edge crosses this one
     };
+    constexpr int kPatches = sizeof(patches) / sizeof(patches[0]);
     for (const Light& light : {sphere_point_light(radius, false), wide, narrow}) {
-        for (const Patch& patch : patches) {
-            double power = 0.0;
-            const int n = 4000000;
-            Rng rng(17, RngDomain::photon, 0);
-            for (int i = 0; i < n; ++i) {
-                const EmissionSample e = sample_light_emission(light, glm::vec3(0.0f), 1.0f, rng.uniform(),
-                                                               rng.uniform(), rng.uniform(), rng.uniform());
-                // The patch lies in a wall: a photon that starts beyond it does not reach the patch.
+        // Every photon is tried on every patch, each alone (the patch lies in a wall: a photon that starts beyond
+        // it does not reach it).
+        double power[kPatches] = {};
+        const int n = 4000000;
+        Rng rng(17, RngDomain::photon, 0);
+        for (int i = 0; i < n; ++i) {
+            const EmissionSample e = sample_light_emission(light, glm::vec3(0.0f), 1.0f, rng.uniform(), rng.uniform(),
+                                                           rng.uniform(), rng.uniform());
+            for (int k = 0; k < kPatches; ++k) {
+                const Patch& patch = patches[k];
                 if (!(glm::dot(e.origin - patch.centre, patch.normal) > 0.0f)) continue;
                 const float towards = glm::dot(e.direction, patch.normal);
                 if (!(towards < 0.0f)) continue;
-                const float t = glm::dot(patch.centre - e.origin, patch.normal) / glm::dot(e.direction, patch.normal);
-                if (!(t > 0.0f)) continue;
-                const glm::vec3 p = e.origin + t * e.direction;
+                const glm::vec3 p = e.origin + (glm::dot(patch.centre - e.origin, patch.normal) / towards) * e.direction;
                 const glm::vec3 q = p - patch.centre;
-                if (std::fabs(glm::dot(q, patch.along_u)) >= rho || std::fabs(glm::dot(q, patch.along_v)) >= rho)
+                if (std::fabs(glm::dot(q, patch.along_u)) >= patch.rho ||
+                    std::fabs(glm::dot(q, patch.along_v)) >= patch.rho)
                     continue;
-                power += e.power.x * first_hit_falloff(e, p, patch.normal);
+                power[k] += e.power.x * first_hit_falloff(e, p, patch.normal);
             }
-            const double photons = power / n / (4.0 * rho * rho);
+        }
+        for (int k = 0; k < kPatches; ++k) {
+            const Patch& patch = patches[k];
+            const float rho = patch.rho;
+            const double photons = power[k] / n / (4.0 * rho * rho);
             double shadow = 0.0;
             for (int i = 0; i < 8; ++i)
                 for (int j = 0; j < 8; ++j) {
