@@ -37,9 +37,20 @@ SurfacePoint surface_at(const Scene& scene, const Ray& ray, const Hit& hit, Shad
     SurfacePoint s;
     s.position = glm::vec3(instance.to_world * glm::vec4(w * p0 + hit.u * p1 + hit.v * p2, 1.0f));
     // Normals go through the inverse transpose; it also keeps the winding normal's side right under mirroring.
+    // A stretched instance of a mesh no other instance shows turns each corner normal before interpolating
+    // (Scene::normals_in_world), as Cycles does where it applied the transform.
     glm::vec3 ng = glm::normalize(instance.normal_to_world * glm::cross(p1 - p0, p2 - p0));
     glm::vec3 ns = ng;
-    if (!mesh.normals.empty()) {
+    if (!mesh.normals.empty() && scene.normals_in_world(instance)) {
+        const auto corner = [&](int c) {
+            const glm::vec3 n = instance.normal_to_world * mesh.corner_normal(t, c);
+            const float len = glm::length(n);
+            return len > 0.0f ? n / len : n;
+        };
+        ns = w * corner(0) + hit.u * corner(1) + hit.v * corner(2);
+        const float len = glm::length(ns);
+        ns = (len > 1e-12f && std::isfinite(len)) ? ns / len : ng;
+    } else if (!mesh.normals.empty()) {
         ns = instance.normal_to_world * (w * mesh.corner_normal(t, 0) + hit.u * mesh.corner_normal(t, 1) +
                                          hit.v * mesh.corner_normal(t, 2));
         const float len = glm::length(ns);

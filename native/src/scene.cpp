@@ -382,6 +382,7 @@ uint32_t Scene::add_mesh_data(const MeshInput& mesh) {
         data.bvh = bvh_queue_->start(data);  // reads the arrays' buffers, which stay put when `data` moves
     }
     meshes_.push_back(std::move(data));
+    mesh_users_.push_back(0);
     return static_cast<uint32_t>(meshes_.size() - 1);
 }
 
@@ -402,6 +403,13 @@ void Scene::place(Instance& instance, const glm::dmat4& to_world) const {
         instance.world_translation = glm::dvec3(0.0);
     }
     const glm::mat3 linear(instance.to_world);
+    // Stretched: NᵀN is not a multiple of the identity (N the normal matrix), to float precision.
+    const glm::mat3 gram = glm::transpose(instance.normal_to_world) * instance.normal_to_world;
+    const float scale = (gram[0][0] + gram[1][1] + gram[2][2]) / 3.0f;
+    instance.stretched = false;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (std::fabs(gram[i][j] - (i == j ? scale : 0.0f)) > 1e-5f * scale) instance.stretched = true;
     instance.rounding_scale = 0.0f;
     for (int corner = 0; corner < 8; ++corner) {
         const glm::vec3 p((corner & 1) ? mesh.bounds_max.x : mesh.bounds_min.x,
@@ -526,6 +534,7 @@ uint32_t Scene::add_instance(uint32_t mesh, const glm::dmat4& to_world, const st
     place(instance, to_world);
     include_in_placed_box(instance);
     instances_.push_back(std::move(instance));
+    ++mesh_users_[mesh];
     recentre();
     std::lock_guard<std::mutex> lock(ray_tracer_mutex());
     tracer_current_ = false;

@@ -136,6 +136,9 @@ struct Instance {
     // scale rounds the same wherever the object is).
     glm::dvec3 world_translation{0.0};
     glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
+    // The linear part stretches some directions more than others (a non-uniform scale or a shear): a normal's
+    // direction then depends on whether it is normalised before or after interpolation (Scene::normals_in_world).
+    bool stretched = false;
     // The largest coordinate of the mesh's object-space box through the linear part: hit points on this
     // instance carry float rounding of this size, whatever their render-space coordinates (offset_ray_origin).
     float rounding_scale = 0.0f;
@@ -231,6 +234,15 @@ public:
     const std::vector<Texture>& textures() const { return textures_; }
     const std::vector<Light>& lights() const { return lights_; }  // positions in render space
     const std::vector<MeshData>& meshes() const { return meshes_; }
+    // Whether the smooth normals of `instance` are Cycles' of a transform it applied: for its final renders
+    // Cycles bakes the transform of a mesh that one object alone shows into the mesh (apply_static_transforms),
+    // each corner normal turned into the world and normalised there, then interpolated; a mesh several objects
+    // show keeps object space, interpolated first and turned after. The two differ only where the transform
+    // stretches (Instance::stretched): a glossy UV sphere scaled 1.31 × 0.78 × 1.27 moved its highlight, the
+    // sphere's light 0.98 of Cycles' (differential seed 34).
+    bool normals_in_world(const Instance& instance) const {
+        return instance.stretched && instance.mesh < mesh_users_.size() && mesh_users_[instance.mesh] == 1;
+    }
     const std::vector<Instance>& instances() const { return instances_; }
     glm::vec3 background() const { return background_; }
     size_t dropped_triangles() const;
@@ -277,6 +289,7 @@ private:
     std::vector<Light> lights_;
     std::vector<glm::dvec3> light_positions_;  // world space, one per light
     std::vector<MeshData> meshes_;
+    std::vector<uint32_t> mesh_users_;  // per mesh, how many instances show it
     // After meshes_: goes first, dropping the builds not started and waiting for the running one.
     bool build_bvhs_ahead_ = false;
     MultiScatterEstimate multiscatter_light_estimate_ = MultiScatterEstimate::light_sample;
