@@ -219,8 +219,10 @@ def test_photons_light_a_rough_refraction_seen_from_its_other_side():
     v, t = scenes.quad((-1, -1, 2), (1, -1, 2), (1, 1, 2), (-1, 1, 2))
     scene.add_mesh(name="ceiling", vertices=v, triangles=t, material_ids=np.full(2, mirror, np.int32))
     scene.add_point_light(name="lamp", position=(0.0, 0.0, 1.0), intensity=(10.0,) * 3, radius=0.15)
+    # The photons' side is the noisier: seeds 2-8 spread over 0.988-1.019 at 512 samples (about 2 % at 128, which
+    # the tolerance did not hold once the lights' photons drew their random numbers in another order).
     ratio = photons_over_path_tracing(scene, top_down_camera(0.9, 16, below=True)[0], traced_samples=16384,
-                                      mapped_samples=128)
+                                      mapped_samples=512)
     print(f"\nfrosted pane under a mirror, from below: photons / path tracing = {ratio:.4f}")
     assert ratio == pytest.approx(1.0, abs=0.02)
 
