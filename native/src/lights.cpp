@@ -497,14 +497,25 @@ void spot_cones_projected_solid_angles(const Light& spot, float cos_cycles, floa
     constexpr int kInnerRings = 6, kOuterRings = 4, kSectors = 16;
     glm::vec3 b1, b2;
     orthonormal_basis(u, b1, b2);
+    const glm::vec3 axis = glm::normalize(spot.direction);
+    const float cos_half_angle = std::cos(0.5f * spot.spot_size);
+    // The sectors' directions about u, once: the rings differ only in how far they lean from it.
+    glm::vec3 across[kSectors];
+    for (int j = 0; j < kSectors; ++j) {
+        const float phi = 2.0f * kPi * (j + 0.5f) / kSectors;
+        across[j] = std::cos(phi) * b1 + std::sin(phi) * b2;
+    }
     const auto ring = [&](float cos_beta) {
         const float sin_beta = std::sqrt(std::max(0.0f, 1.0f - cos_beta * cos_beta));
         float sum = 0.0f;
         for (int j = 0; j < kSectors; ++j) {
-            const float phi = 2.0f * kPi * (j + 0.5f) / kSectors;
-            const glm::vec3 w = cos_beta * u + sin_beta * (std::cos(phi) * b1 + std::sin(phi) * b2);
+            const glm::vec3 w = cos_beta * u + sin_beta * across[j];
             const float cosine = glm::dot(w, n);
-            if (cosine > 0.0f) sum += cosine * spot.spot_attenuation(-w);
+            if (!(cosine > 0.0f)) continue;
+            // Light::spot_attenuation(−w), its axis and cone taken once.
+            const float cos_theta = -glm::dot(axis, w);
+            const float edge = spot_smoothstep(cos_theta, cos_half_angle, spot.spot_blend);
+            sum += cosine * (spot.spot_cosine ? cos_theta * edge : edge);
         }
         return sum * 2.0f * kPi / kSectors;
     };
