@@ -18,8 +18,8 @@ Edits:
   set:EXPR=VALUE          any property, as Python: set:bpy.data.lights['Light0'].shadow_soft_size=0.1
 
 Prints per variant Cycles' mean (two seeds, their relative difference as its noise), the reference's (likewise) and
-their ratio; with --passes, Photon Splat's after that many progressive passes; with --blocks, the 8 x 8 map of the
-reference's blocks over Cycles'. Found stop 50's two biases: seed 15's soft point light under its ceiling (its
+their ratio; with --passes, Photon Splat's after that many progressive passes; with --blocks, the 8 x 8 maps of the
+reference's blocks (and Photon Splat's) over Cycles'. Found stop 50's two biases: seed 15's soft point light under its ceiling (its
 light alone 0.972, at one bounce 0.976, direct light 1.000) and seed 34's stretched glossy sphere (its light
 alone 0.982, direct light 0.971, the sphere flat-shaded 1.000).
 """
@@ -118,6 +118,7 @@ def blender_main(argv):
         noise = lambda pair: abs(pair[0].mean() - pair[1].mean()) / max(pair[0].mean() + pair[1].mean(), 1e-12)
         line = (f"variant {variant!r}: Cycles {c.mean():.5f} (noise {noise(cycles):.4f}), reference {r.mean():.5f} "
                 f"(noise {noise(reference):.4f}), reference / Cycles {r.mean() / max(c.mean(), 1e-12):.4f}")
+        ours = None
         if args.passes > 0:
             settings = frame.settings
             settings.iterations, settings.time_limit = args.passes, 0.0
@@ -133,6 +134,9 @@ def blender_main(argv):
             np.set_printoptions(precision=3, linewidth=200, suppress=True)
             cb = block_means(c).mean(-1)
             print(block_means(r).mean(-1) / np.maximum(cb, 1e-12))
+            if ours is not None:
+                print("Photon Splat / Cycles:")
+                print(block_means(ours).mean(-1) / np.maximum(cb, 1e-12))
 
 
 if __name__ == "__main__":

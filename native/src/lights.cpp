@@ -452,40 +452,19 @@ EmissionSample sample_light_emission(const Light& light, const glm::vec3& scene_
 
 namespace {
 
-// The projected solid angle (∫ cos⁺ dω over the horizon of the unit normal n) of a disc that faces the receiver,
-// seen under the angular radius α around the unit direction u. Where the disc lies wholly above the horizon it is
-// π sin²α cos θ (θ between u and n); where it crosses the horizon, the disc is a polygon of its area, clipped
-// by the tangent plane, whose projected solid angle is Lambert's sum over its edges (each edge's angle times the
-// cosine between n and the normal of the plane it spans with the receiver).
-float facing_disc_projected_solid_angle(float cos_alpha, float sin_alpha, const glm::vec3& u, const glm::vec3& n) {
-    const float cos_theta = glm::dot(u, n);
-    if (cos_theta >= sin_alpha) return kPi * sin_alpha * sin_alpha * cos_theta;
-    if (-cos_theta >= sin_alpha) return 0.0f;
-    constexpr int kEdges = 48;
-    // The polygon's vertices a little outside the circle, so that its area is the disc's.
-    const float spread = sin_alpha * std::sqrt(2.0f * kPi / (kEdges * std::sin(2.0f * kPi / kEdges)));
-    glm::vec3 b1, b2;
-    orthonormal_basis(u, b1, b2);
-    glm::vec3 clipped[kEdges * 2];
-    int count = 0;
-    const auto vertex = [&](int k) {
-        const float phi = 2.0f * kPi * static_cast<float>(k % kEdges) / kEdges;
-        return cos_alpha * u + spread * (std::cos(phi) * b1 + std::sin(phi) * b2);
-    };
-    for (int k = 0; k < kEdges; ++k) {
-        const glm::vec3 a = vertex(k), b = vertex(k + 1);
-        const float da = glm::dot(a, n), db = glm::dot(b, n);
-        if (da >= 0.0f) clipped[count++] = a;
-        if ((da >= 0.0f) != (db >= 0.0f)) clipped[count++] = a + (da / (da - db)) * (b - a);
-    }
-    float sum = 0.0f;
-    for (int k = 0; k < count; ++k) {
-        const glm::vec3 a = glm::normalize(clipped[k]), b = glm::normalize(clipped[(k + 1) % count]);
-        const glm::vec3 c = glm::cross(a, b);
-        const float s = glm::length(c);
-        if (s > 0.0f) sum += std::atan2(s, glm::dot(a, b)) * glm::dot(c, n) / s;
-    }
-    return count >= 3 ? 0.5f * std::fabs(sum) : 0.0f;
+// The projected solid angle (∫ cos⁺ dω over the horizon of a surface) of the cone of directions within α of a
+// direction θ from the surface's normal: π sin²α cos θ where the cone lies wholly above the horizon, 0 wholly below,
+// and where the horizon cuts it, the clipped cap's closed form (Snyder's sphere form factor with the horizon): with
+// x = cot α and y = −x cot θ, (cos θ acos y − x sin θ √(1 − y²)) sin²α + atan(sin θ √(1 − y²) / x). A disc facing
+// the receiver is such a cone, and so is a sphere's silhouette.
+float cone_projected_solid_angle(float cos_theta, float sin2_alpha) {
+    if (sin2_alpha >= 1.0f) return 0.5f * kPi * (1.0f + cos_theta);  // the half of all directions about u
+    if (cos_theta * cos_theta > sin2_alpha) return kPi * sin2_alpha * std::max(cos_theta, 0.0f);
+    const float sin_theta = std::sqrt(std::max(0.0f, 1.0f - cos_theta * cos_theta));
+    const float x = std::sqrt(1.0f / sin2_alpha - 1.0f);
+    const float y = std::clamp(-x * cos_theta / sin_theta, -1.0f, 1.0f);
+    const float s = sin_theta * std::sqrt(std::max(0.0f, 1.0f - y * y));
+    return std::max(0.0f, (cos_theta * std::acos(y) - x * s) * sin2_alpha + std::atan2(s, x));
 }
 
 // The same for a spot's two cones about u at once, each direction weighed by the spot's attenuation along the
@@ -548,15 +527,9 @@ float first_hit_falloff(const EmissionSample& emitted, const glm::vec3& x, const
                                           d2 > r2 ? std::sqrt(1.0f - r2 / d2) : 0.0f, u, n, cycles, photons);
         return photons > 0.0f ? std::min(1.0f, cycles / photons) : 0.0f;
     }
-    const float dr = std::sqrt(d2 + r2);
-    const float cycles = facing_disc_projected_solid_angle(d / dr, emitted.disc_radius / dr, u, n);
-    float photons;
-    if (d2 > r2) {
-        const float sin_alpha = emitted.disc_radius / d;
-        photons = facing_disc_projected_solid_angle(std::sqrt(1.0f - sin_alpha * sin_alpha), sin_alpha, u, n);
-    } else {
-        photons = 0.5f * kPi * (1.0f + glm::dot(u, n));
-    }
+    const float cos_theta = glm::dot(u, n);
+    const float cycles = cone_projected_solid_angle(cos_theta, r2 / (d2 + r2));
+    const float photons = cone_projected_solid_angle(cos_theta, d2 > r2 ? r2 / d2 : 1.0f);
     if (!(photons > 0.0f)) return 0.0f;
     return std::min(1.0f, cycles / photons);
 }
