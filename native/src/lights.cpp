@@ -52,12 +52,17 @@ float spot_cone_integral(float cos_half_angle, float blend, bool cosine) {
     return s * (0.5f * c + 0.35f * s) + 0.5f * (1.0f - (c + s) * (c + s));
 }
 
+// A spot's attenuation at cos θ from its axis, its cone's half angle's cosine given (spot_attenuation, and the
+// quadrature of first_hit_falloff, which takes the axis and the cone once for many directions).
+float spot_profile(const Light& spot, float cos_theta, float cos_half_angle) {
+    const float edge = spot_smoothstep(cos_theta, cos_half_angle, spot.spot_blend);
+    return spot.spot_cosine ? cos_theta * edge : edge;
+}
+
 }  // namespace
 
 float Light::spot_attenuation(const glm::vec3& outgoing) const {
-    const float cos_theta = glm::dot(glm::normalize(direction), outgoing);
-    const float edge = spot_smoothstep(cos_theta, std::cos(0.5f * spot_size), spot_blend);
-    return spot_cosine ? cos_theta * edge : edge;
+    return spot_profile(*this, glm::dot(glm::normalize(direction), outgoing), std::cos(0.5f * spot_size));
 }
 
 void validate(const Light& light, const std::string& where) {
@@ -491,10 +496,7 @@ void spot_cones_projected_solid_angles(const Light& spot, float cos_cycles, floa
             const glm::vec3 w = cos_beta * u + sin_beta * across[j];
             const float cosine = glm::dot(w, n);
             if (!(cosine > 0.0f)) continue;
-            // Light::spot_attenuation(−w), its axis and cone taken once.
-            const float cos_theta = -glm::dot(axis, w);
-            const float edge = spot_smoothstep(cos_theta, cos_half_angle, spot.spot_blend);
-            sum += cosine * (spot.spot_cosine ? cos_theta * edge : edge);
+            sum += cosine * spot_profile(spot, -glm::dot(axis, w), cos_half_angle);  // spot_attenuation(−w)
         }
         return sum * 2.0f * kPi / kSectors;
     };

@@ -144,3 +144,29 @@ def pixel_of(scene, camera, point):
     if depth <= 0.0 or not (0 <= column < width and 0 <= row < height):
         return None
     return row, column
+
+
+def direct_light_pair(scene, size, tmp_path, core, cycles_samples=512, passes=64):
+    """The direct light of `scene` (no bounces) at size x size, as (Cycles, Photon Splat) float64 RGB images with
+    row 0 at the top: Cycles at `cycles_samples` with a 1 px box filter and no light threshold, Photon Splat after
+    `passes` progressive passes."""
+    from photonsplat import export
+    use_cycles(scene, size, 0, samples=cycles_samples)
+    scene.cycles.light_sampling_threshold = 0.0
+    scene.cycles.pixel_filter_type = 'BOX'
+    scene.cycles.filter_width = 1.0
+    cycles = np.flipud(render_pixels(tmp_path / "cycles.exr"))[..., :3].astype(np.float64)
+    scene.render.engine = 'PHOTONSPLAT'
+    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
+    settings = frame.settings
+    settings.max_bounces, settings.threads, settings.seed = 0, 2, 1
+    progressive = core.Progressive(frame.scene, frame.camera, settings)
+    for _ in range(passes):
+        progressive.step()
+    return cycles, np.asarray(progressive.image())[..., :3].astype(np.float64)
+
+
+def block_means(image, block=4):
+    """Means of block x block pixels (RGB averaged)."""
+    h, w = image.shape[:2]
+    return image[..., :3].reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3, 4))

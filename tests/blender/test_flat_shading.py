@@ -11,19 +11,13 @@ Cycles' noise)."""
 import bpy
 import numpy as np
 
-from blender_helpers import render_pixels, use_cycles
+from blender_helpers import block_means, direct_light_pair
 from test_photon_shading_normals import lone_smooth_suzanne
 
 SIZE = 48
 
 
-def blocks(image, block=4):
-    h, w = image.shape[:2]
-    return image[..., :3].reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3, 4))
-
-
 def test_a_flat_shaded_suzanne_is_lit_by_its_triangles_normals_as_in_cycles(empty_scene, tmp_path, core):
-    from photonsplat import export
     scene = lone_smooth_suzanne(empty_scene)
     suzanne = bpy.data.objects["Suzanne"]
     for obj in scene.objects:
@@ -31,21 +25,9 @@ def test_a_flat_shaded_suzanne_is_lit_by_its_triangles_normals_as_in_cycles(empt
     bpy.context.view_layer.objects.active = suzanne
     bpy.ops.object.shade_flat()
     assert not any(polygon.use_smooth for polygon in suzanne.data.polygons)
-    use_cycles(scene, SIZE, 0, samples=512)
-    scene.cycles.light_sampling_threshold = 0.0
-    scene.cycles.pixel_filter_type = 'BOX'
-    scene.cycles.filter_width = 1.0
-    cycles = np.flipud(render_pixels(tmp_path / "cycles.exr"))[..., :3].astype(np.float64)
-    scene.render.engine = 'PHOTONSPLAT'
-    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
-    settings = frame.settings
-    settings.max_bounces, settings.threads, settings.seed = 0, 2, 1
-    progressive = core.Progressive(frame.scene, frame.camera, settings)
-    for _ in range(64):
-        progressive.step()
-    ours = np.asarray(progressive.image())[..., :3].astype(np.float64)
-    lit = blocks(cycles) > 0.05 * blocks(cycles).max()
-    ratios = blocks(ours)[lit] / blocks(cycles)[lit]
+    cycles, ours = direct_light_pair(scene, SIZE, tmp_path, core)
+    lit = block_means(cycles) > 0.05 * block_means(cycles).max()
+    ratios = block_means(ours)[lit] / block_means(cycles)[lit]
     print(f"\nflat-shaded Suzanne's direct light, Photon Splat / Cycles: {ours.sum() / cycles.sum():.4f}; "
           f"4 x 4 blocks {np.percentile(ratios, 5):.3f}-{np.percentile(ratios, 95):.3f} (5th-95th percentile), "
           f"{np.mean(np.abs(ratios - 1.0) > 0.05):.3f} of them more than 5 % off")

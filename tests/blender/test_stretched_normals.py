@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 import pytest
 
-from blender_helpers import render_pixels, use_cycles
+from blender_helpers import block_means, direct_light_pair
 
 SIZE = 48
 
@@ -60,29 +60,11 @@ def stretched_glossy_sphere(scene, linked_duplicate):
     return scene
 
 
-def blocks(image, block=4):
-    h, w = image.shape[:2]
-    return image[..., :3].reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3, 4))
-
-
 @pytest.mark.parametrize("linked_duplicate", [False, True], ids=["shown_once", "linked_duplicate"])
 def test_a_stretched_smooth_sphere_reflects_a_light_where_cycles_does(empty_scene, tmp_path, core, linked_duplicate):
-    from photonsplat import export
     scene = stretched_glossy_sphere(empty_scene, linked_duplicate)
-    use_cycles(scene, SIZE, 0, samples=512)
-    scene.cycles.light_sampling_threshold = 0.0
-    scene.cycles.pixel_filter_type = 'BOX'
-    scene.cycles.filter_width = 1.0
-    cycles = np.flipud(render_pixels(tmp_path / "cycles.exr"))[..., :3].astype(np.float64)
-    scene.render.engine = 'PHOTONSPLAT'
-    frame = export.export_frame(core, bpy.context.evaluated_depsgraph_get())
-    settings = frame.settings
-    settings.max_bounces, settings.threads, settings.seed = 0, 2, 1
-    progressive = core.Progressive(frame.scene, frame.camera, settings)
-    for _ in range(64):
-        progressive.step()
-    ours = np.asarray(progressive.image())[..., :3].astype(np.float64)
-    c, p = blocks(cycles), blocks(ours)
+    cycles, ours = direct_light_pair(scene, SIZE, tmp_path, core)
+    c, p = block_means(cycles), block_means(ours)
     lit = c > 0.05 * c.max()
     ratios = p[lit] / c[lit]
     print(f"\n{'a linked duplicate' if linked_duplicate else 'shown once'}: Photon Splat / Cycles "
