@@ -7,7 +7,7 @@ difference go away. Each variant is a ';'-separated list of edits applied to the
 
     BLENDER_USER_SCRIPTS=build/blender blender -b --factory-startup -noaudio --addons photonsplat \\
         --python tools/scene_variants.py -- random_15.blend "" "hide:Light1" "hide:Light1;world:0" \\
-        [--bounces 16] [--cycles-samples 512] [--reference-samples 256] [--passes 100] [--blocks]
+        [--bounces 16] [--cycles-samples 512] [--reference-samples 256] [--passes 100] [--blocks] [--save DIR]
 
 Edits:
   hide:NAME[,NAME...]     hide meshes or lights (from render and the viewport's depsgraph, which the export reads)
@@ -44,6 +44,8 @@ def parse_args(argv):
     p.add_argument("--passes", type=int, default=0, help="Photon Splat progressive passes (0: not rendered)")
     p.add_argument("--blocks", action="store_true", help="print the reference / Cycles map of 8 x 8 blocks")
     p.add_argument("--threads", type=int, default=2)
+    p.add_argument("--save", type=Path, help="folder for each variant's images (variant_K.npz: cycles, reference, "
+                   "photonsplat), to look at pixel by pixel")
     return p.parse_args(argv)
 
 
@@ -129,6 +131,11 @@ def blender_main(argv):
             ours = np.asarray(progressive.image())[..., :3]
             line += f", Photon Splat / Cycles {ours.mean() / max(c.mean(), 1e-12):.4f} ({args.passes} passes)"
         print(line, flush=True)
+        if args.save is not None:
+            args.save.mkdir(parents=True, exist_ok=True)
+            images = {"cycles": c, "reference": r} if ours is None else {"cycles": c, "reference": r, "photonsplat": ours}
+            np.savez_compressed(args.save / f"variant_{args.variants.index(variant)}.npz",
+                                **{k: v.astype(np.float32) for k, v in images.items()})
         if args.blocks:
             from differential import block_means
             np.set_printoptions(precision=3, linewidth=200, suppress=True)

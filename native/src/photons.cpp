@@ -407,7 +407,8 @@ void trace_path(const Scene& scene, const EmissionSample& emitted, const PhotonS
         else if (along_exit_normal)
             step_weight = weight_seen_along_exit_normal(scene, s, b, drawn_from, step.direction);
         else if (seen_from_exit)
-            step_weight = weight_seen_from_exit(scene, s, b, step);
+            // A transmission where the horizon draws: only the closures' share (1 − kHorizonDraw) reaches it.
+            step_weight = weight_seen_from_exit(scene, s, b, step) / (exit_normals ? 1.0f - kHorizonDraw : 1.0f);
         if (step.kind != ScatterKind::transparent) {
             direct = false;
             after_glossy = step.glossy;
