@@ -99,7 +99,7 @@ def blender_main(argv):
     args = parse_args(argv)
     core = engine.load_core()
     folder = Path(tempfile.mkdtemp())
-    for variant in args.variants:
+    for index, variant in enumerate(args.variants):
         bpy.ops.wm.open_mainfile(filepath=args.blend)
         scene = bpy.context.scene
         if "differential" in scene:
@@ -133,8 +133,10 @@ def blender_main(argv):
         print(line, flush=True)
         if args.save is not None:
             args.save.mkdir(parents=True, exist_ok=True)
-            images = {"cycles": c, "reference": r} if ours is None else {"cycles": c, "reference": r, "photonsplat": ours}
-            np.savez_compressed(args.save / f"variant_{args.variants.index(variant)}.npz",
+            images = {"cycles": c, "reference": r}
+            if ours is not None:
+                images["photonsplat"] = ours
+            np.savez_compressed(args.save / f"variant_{index}.npz",
                                 **{k: v.astype(np.float32) for k, v in images.items()})
         if args.blocks:
             from differential import block_means
