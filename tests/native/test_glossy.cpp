@@ -684,6 +684,30 @@ TEST(GlassPhotons, AThinPanesBackFaceKeepsWhatNeverCrossedIt) {
     EXPECT_NEAR(pane_sum / double(on_pane) / (floor_sum / double(photons.size() - on_pane)), 1.0, 0.1);
 }
 
+// Cycles' rough Glass as the export gives it: its refraction weighed by 1 − F and (where `reflects`) its reflection
+// by F, F the Fresnel of the view (a MixFactor), both white and of roughness α.
+Material cycles_rough_glass(const char* name, float ior, float alpha, bool reflects) {
+    Material m;
+    m.name = name;
+    m.kind = MaterialKind::closures;
+    m.factors = {MixFactor{FactorKind::fresnel, ior}};
+    Closure refraction;
+    refraction.kind = ClosureKind::refraction;
+    refraction.color = glm::vec3(1.0f);
+    refraction.alpha_x = refraction.alpha_y = alpha;
+    refraction.ior = ior;
+    refraction.factors_off = 1u;
+    m.closures = {refraction};
+    if (reflects) {
+        Closure reflection = refraction;
+        reflection.kind = ClosureKind::reflection;
+        reflection.factors_off = 0u;
+        reflection.factors_on = 1u;
+        m.closures.push_back(reflection);
+    }
+    return m;
+}
+
 // Cycles weighs Glass's two halves by the Fresnel of its view, which on a light path is where the light goes on
 // to, not where it came from: below a rough Glass pane (Cycles' inside), a view steeper than the critical angle
 // sees the pane's refraction weighed 1 − F = 0. Photons that came down through the pane along such directions
@@ -692,19 +716,9 @@ TEST(GlassPhotons, AThinPanesBackFaceKeepsWhatNeverCrossedIt) {
 // of Cycles: tools/rough_glass_cylinder.py).
 TEST(GlassPhotons, TheGlassSplitIsWeighedFromWhereThePhotonGoes) {
     const float ior = 1.5f;
-    Material pane;
-    pane.name = "glass_pane";
-    pane.kind = MaterialKind::closures;
-    pane.factors = {MixFactor{FactorKind::fresnel, ior}};
-    Closure refraction;
-    refraction.kind = ClosureKind::refraction;
-    refraction.color = glm::vec3(1.0f);
-    refraction.alpha_x = refraction.alpha_y = 0.25f;
-    refraction.ior = ior;
-    refraction.factors_off = 1u;
     // Glass's refraction half alone: nothing comes back down from the pane's underside to the floor but what
     // came through it.
-    pane.closures = {refraction};
+    const Material pane = cycles_rough_glass("glass_pane", ior, 0.25f, false);
     // The lamp low beside the pane: its light enters at grazing angles.
     const std::vector<Photon> photons = photons_over_floor(pane, 2.0f, {2.0f, 0.0f, 1.6f}, 40000, 5);
     const float cos_critical = std::sqrt(1.0f - 1.0f / (ior * ior));
@@ -726,22 +740,7 @@ TEST(GlassPhotons, TheGlassSplitIsWeighedFromWhereThePhotonGoes) {
 // scene with that alone 0.954). A pane of Cycles' rough Glass (its reflection weighed by F, its refraction by 1 − F)
 // over a white floor: the light through it is the same whether its corner normals lean out by 2° or not.
 TEST(GlassPhotons, ASmoothShadedGlassPassesOnWhatAFlatOneDoes) {
-    const float ior = 1.5f;
-    Material glass;
-    glass.name = "rough_glass";
-    glass.kind = MaterialKind::closures;
-    glass.factors = {MixFactor{FactorKind::fresnel, ior}};
-    Closure refraction;
-    refraction.kind = ClosureKind::refraction;
-    refraction.color = glm::vec3(1.0f);
-    refraction.alpha_x = refraction.alpha_y = 0.2f;
-    refraction.ior = ior;
-    refraction.factors_off = 1u;
-    Closure reflection = refraction;
-    reflection.kind = ClosureKind::reflection;
-    reflection.factors_off = 0u;
-    reflection.factors_on = 1u;
-    glass.closures = {refraction, reflection};
+    const Material glass = cycles_rough_glass("rough_glass", 1.5f, 0.2f, true);
     double through[2] = {0.0, 0.0};
     for (int smooth = 0; smooth < 2; ++smooth) {
         Scene scene;
