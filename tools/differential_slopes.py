@@ -48,15 +48,16 @@ def classify(result, images):
     cycles, spread = images["cycles"], images["cycles_spread"]
     at_4, at_16 = images["ps_4"], images["ps_16"]
     luminance = lambda x: x[..., :3].mean(-1)  # noqa: E731
+    lum_16, lum_cycles = luminance(at_16), luminance(cycles)
     block_mean = np.kron(luminance(block_means(cycles)), np.ones((BLOCK, BLOCK)))
     h, w = block_mean.shape
-    off = np.abs(luminance(at_16)[:h, :w] - luminance(cycles)[:h, :w]) / np.maximum(block_mean, 1e-12)
+    off = np.abs(lum_16[:h, :w] - lum_cycles[:h, :w]) / np.maximum(block_mean, 1e-12)
     worst = np.unravel_index(np.argsort(off, axis=None)[::-1][:WORST_PIXELS], off.shape)
     patched_4, patched_16 = at_4.copy(), at_16.copy()
     patched_4[worst], patched_16[worst] = cycles[worst], cycles[worst]
     without_pixels = slope(excess(patched_4, cycles, spread), excess(patched_16, cycles, spread))
     photonsplat_bright = any(
-        luminance(at_16)[p] > luminance(cycles)[p] and np.abs(spread[p][:3]).mean() < 0.1 * luminance(cycles)[p]
+        lum_16[p] > lum_cycles[p] and np.abs(spread[p][:3]).mean() < 0.1 * lum_cycles[p]
         for p in zip(*worst))
     blocks = luminance(block_means(cycles))
     blocks_spread = np.sqrt(luminance(block_means(np.square(spread))) / (BLOCK * BLOCK))
