@@ -416,4 +416,51 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
     return out;
 }
 
+std::vector<glm::vec3> compute_dropped_direct_light(const Scene& scene, const ViewSamples& samples,
+                                                    const DirectLightSettings& settings, const RenderControl& control,
+                                                    Stats& stats) {
+    std::vector<size_t> chosen;
+    for (size_t i = 0; i < samples.samples.size(); ++i)
+        if (has_dropped_parts(samples.samples[i])) chosen.push_back(i);
+    if (chosen.empty()) return {};
+    StageTimer timer(stats, "direct_light");
+    std::vector<glm::vec3> out(samples.samples.size(), glm::vec3(0.0f));
+    const LightSources sources(scene);
+    if (sources.size() == 0) return out;
+    const DirectLightContext context{scene, sources, settings.samples_per_light, scene_has_transparency(scene)};
+    std::atomic<bool> cancelled{false};
+    std::atomic<uint64_t> shadow_rays{0};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chosen.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+        if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
+            cancelled = true;
+            return;
+        }
+        uint64_t rays = 0;
+        Bsdf b;
+        for (size_t n = range.begin(); n < range.end(); ++n) {
+            const size_t i = chosen[n];
+            const ViewSample& s = samples.samples[i];
+            bsdf_of(s, samples.lobes, b);
+            b.lambert = glm::vec3(0.0f);
+            int kept = 0;
+            for (int k = 0; k < b.lobe_count; ++k)
+                if (!labelled_diffuse(b.lobes[k])) b.lobes[kept++] = b.lobes[k];
+            b.lobe_count = kept;
+            if (kept == 0) continue;
+            const uint64_t key = uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32);
+            Rng rng(settings.seed, RngDomain::dropped_direct, key);
+            const auto lift = std::lower_bound(samples.terminator.begin(), samples.terminator.end(), i,
+                                               [](const ViewSamples::SampleLift& l, size_t j) { return l.sample < j; });
+            const TerminatorLift* terminator =
+                lift != samples.terminator.end() && lift->sample == i ? &lift->lift : nullptr;
+            out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
+                                                    LobeSet::reflection, rng, rays, {}, terminator);
+        }
+        shadow_rays += rays;
+    });
+    control.check();
+    stats.counters["shadow_rays"] += static_cast<double>(shadow_rays.load());
+    return out;
+}
+
 }  // namespace ps

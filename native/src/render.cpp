@@ -97,17 +97,24 @@ PhotonMap caustic_photons_of(const PhotonMap& photons, CausticState state) {
     return caustic;
 }
 
-// The Caustics output's light per view sample: the two splats above.
+// The Caustics output's light per view sample: the two splats above, and where samples reached right after
+// translucency have parts Cycles drops there, a third: every photon's light through those parts.
 SplatEstimate splat_caustics(const Splatter& splatter, const SplatFrame& frame, const PhotonMap& photons,
                              SplatParams params, RenderControl& control, Stats& stats) {
     params.label_share = LabelShare::other;
     SplatEstimate caustic =
         splatter.splat(frame, caustic_photons_of(photons, kReachedOtherwise), params, control, stats);
+    const auto add = [&caustic](const SplatEstimate& e) {
+        for (size_t i = 0; i < caustic.radiance.size(); ++i) caustic.radiance[i] += e.radiance[i];
+        caustic.kernel_estimate = caustic.kernel_estimate && e.kernel_estimate;
+    };
     params.label_share = LabelShare::diffuse;
-    const SplatEstimate diffusely =
-        splatter.splat(frame, caustic_photons_of(photons, kReachedDiffusely), params, control, stats);
-    for (size_t i = 0; i < caustic.radiance.size(); ++i) caustic.radiance[i] += diffusely.radiance[i];
-    caustic.kernel_estimate = caustic.kernel_estimate && diffusely.kernel_estimate;
+    add(splatter.splat(frame, caustic_photons_of(photons, kReachedDiffusely), params, control, stats));
+    const auto& samples = frame.samples.samples;
+    if (std::any_of(samples.begin(), samples.end(), has_dropped_parts)) {
+        params.label_share = LabelShare::other_parts;
+        add(splatter.splat(frame, photons, params, control, stats));
+    }
     return caustic;
 }
 
@@ -486,9 +493,15 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         SplatParams params = splat_params(settings, iteration.radius, photons.emitted);
         params.max_pairs_in_memory =
             fit_pair_cap(budget, splatter->predict_memory(frame, photon_count, params));
-        const SplatLight light = splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output,
-                                              settings, seed, hierarchy ? 0.5 : 0.45, 0.98, control, stats);
+        SplatLight light = splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output, settings,
+                                        seed, hierarchy ? 0.5 : 0.45, 0.98, control, stats);
         result.kernel_estimate = light.kernel_estimate;
+        if (caustics_output) {
+            // Direct light through the parts Cycles' Caustics toggles drop after translucency is caustic whole.
+            const std::vector<glm::vec3> dropped =
+                compute_dropped_direct_light(scene, samples, direct_settings, control, stats);
+            for (size_t i = 0; i < dropped.size(); ++i) light.caustic[i] += dropped[i];
+        }
         stats.bytes["indirect_light"] = static_cast<double>(light.indirect.capacity() * sizeof(glm::vec3));
 
         // 7. The film.

@@ -355,10 +355,9 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
     return reflection_value(lambert, lobes, lobe_count, n, wi, wo);
 }
 
-namespace {
-
-// A part Cycles labels diffuse when it samples from it (its Light Path flags and Caustics toggles go by it).
 bool labelled_diffuse(const Lobe& l) { return is_diffuse_reflection(l) || l.kind == ClosureKind::translucent; }
+
+namespace {
 
 // Σ w_j p_j(wi) over the parts (all, and the diffuse-labelled ones), and f(wi) likewise, for ScatterLabel and
 // LabelShare. `lambert` counts only for wi above n; lobes only on their own side (reflection or transmission).
@@ -417,14 +416,17 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
     if (share == LabelShare::whole && !clearcoat)
         return reflection_value(lambert, lobes, lobe_count, n, wi, wo, MultiScatterEstimate::walk, diffuse_term);
     const LabelSums sums = label_sums(lambert, lobes, lobe_count, n, wi, wo, selection_floor, true, diffuse_term);
-    if (!(sums.picked > 0.0f)) return share == LabelShare::diffuse ? glm::vec3(0.0f) : sums.f;
+    if (share == LabelShare::diffuse_parts) return sums.f_diffuse;
     // Cycles' camera path draws wi with density Σ w_j p_j^drawn and weighs it by f / Σ w_j p_j^reported: it converges
     // to f Σ w p^drawn / Σ w p^reported, which is f but where a clearcoat's two densities differ (bsdf_has_clearcoat).
     // Of that, the share it labels diffuse is f Σ_diffuse w p / Σ w p^reported.
+    const glm::vec3 whole = sums.picked > 0.0f ? sums.f * (sums.drawn / sums.picked) : sums.f;
+    if (share == LabelShare::other_parts) return glm::max(whole - sums.f_diffuse, glm::vec3(0.0f));
+    if (!(sums.picked > 0.0f)) return share == LabelShare::diffuse ? glm::vec3(0.0f) : sums.f;
     switch (share) {
-        case LabelShare::whole: return sums.f * (sums.drawn / sums.picked);
+        case LabelShare::whole: return whole;
         case LabelShare::diffuse: return sums.f * (sums.picked_diffuse / sums.picked);
-        case LabelShare::other: break;
+        default: break;
     }
     return sums.f * (std::max(0.0f, sums.drawn - sums.picked_diffuse) / sums.picked);
 }

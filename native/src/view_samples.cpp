@@ -143,6 +143,7 @@ void add_view_sample(PixelPaths& p, const CameraPath& path, const SurfacePoint& 
     if (sample.lobe_count > 0) sample.flags |= kGlossy;
     if (path.depth == 0 && b != nullptr) sample.selection_floor = defensive_floor(*b);
     if (path.caustic || (path.diffuse_last && !diffuse_part)) sample.flags |= kCausticSample;
+    else if (path.diffuse_last) sample.flags |= kAfterDiffuseScatter;
     if (inside_transmitter(s)) sample.flags |= kInsideSample;
     if (bump_shadowed(sample.smooth_normal, sample.shading_normal))
         sample.flags |= kBumpShadowed | bump_form_flags(p.scene.bump_shadowing(*s.material));

@@ -35,6 +35,13 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                                             const DirectLightSettings& settings, const RenderControl& control,
                                             Stats& stats);
 
+// For the Caustics output: the direct light of the samples reached right after translucency (kAfterDiffuseScatter,
+// view_samples.h) through the parts Cycles' Caustics toggles drop there (all but the diffuse-labelled ones), with
+// shadow rays of its own, throughput included; 0 at every other sample. Empty when no sample has such parts.
+std::vector<glm::vec3> compute_dropped_direct_light(const Scene& scene, const ViewSamples& samples,
+                                                    const DirectLightSettings& settings, const RenderControl& control,
+                                                    Stats& stats);
+
 // Direct light scattered by one set of a BSDF's parts at x (towards b.wo), throughput not included:
 //   - every source sampled `samples_per_light` times (once if it is a delta light), stratified, from the side
 //     of the surface the set scatters from (reflection: wo's side; transmission: the other);

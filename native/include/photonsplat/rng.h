@@ -20,6 +20,7 @@ enum class RngDomain : uint64_t {
     reference_photon = 17,  // reference renderer: one caustic photon, keyed by pass × photons + photon
     glass_walk = 18,        // the microsurface walks that tabulate Multiscatter GGX glass (glass_multiscatter.cpp)
     glass_light_value = 19, // Cycles' walk that evaluates that glass towards a light sample (glass_multiscatter.cpp)
+    dropped_direct = 20,    // direct light through the parts the Caustics output takes whole (direct_light.cpp)
 };
 
 // PCG32 (O'Neill 2014), with state and stream derived from the key by SplitMix64.

@@ -97,7 +97,10 @@ glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int 
 // proportion to its sampling weight w_j, draws wi from its density p_j and weighs the result by the sum of every
 // part's f over Σ w_j p_j(wi), so the diffuse-labelled share of f(wi) is Σ_diffuse w_j p_j(wi) / Σ_all w_j p_j(wi).
 // selection_floor is Cycles' defensive floor at the camera's first hit (choose_defensively; 0 elsewhere).
-enum class LabelShare : uint8_t { whole, diffuse, other };
+// Where the camera path reaches the surface right after a diffuse-labelled scatter, Cycles' toggles drop every part
+// but the diffuse-labelled ones instead: `diffuse_parts` is the f of those parts alone, `other_parts` the rest of f
+// (the whole's, clearcoat's estimate included, less the diffuse parts').
+enum class LabelShare : uint8_t { whole, diffuse, other, diffuse_parts, other_parts };
 // `diffuse_term`: what the diffuse parts are multiplied by for this wi (bump_shadowing_term, 1 where none applies).
 glm::vec3 bsdf_eval_reflection(const glm::vec3& lambert, const Lobe* lobes, int lobe_count, const glm::vec3& n,
                                const glm::vec3& wi, const glm::vec3& wo, LabelShare share, float selection_floor,
@@ -172,6 +175,9 @@ Bsdf without_translucency(const Bsdf& b);
 // A part Cycles labels a diffuse reflection (Oren–Nayar, Principled diffuse, sheen, velvet), as against a microfacet
 // one: its Light Path flags and Caustics toggles go by that label.
 bool is_diffuse_reflection(const Lobe& lobe);
+// A part Cycles labels diffuse when it samples from it (its Light Path flags and Caustics toggles go by it):
+// a diffuse reflection or translucency.
+bool labelled_diffuse(const Lobe& lobe);
 // The parts Cycles gives its bump shadowing term (bump_shadowing.h): Lambert, and lobes of these kinds.
 bool takes_bump_shadowing(const Lobe& lobe);
 // What b's diffuse parts are multiplied by for light from wi: bump_shadowing_term where b is bump-shadowed, else 1.

@@ -65,7 +65,7 @@ struct SplatParams {
     // one photon alone has more.) Must be >= 1; small values are for tests (they make many batches).
     uint64_t max_pairs_in_memory = kDefaultMaxPairsInMemory;
     // The share of each sample's BRDF the photons are splatted with: the whole, except for the Caustics output's
-    // two splats (render.cpp), which weigh its photons by how Cycles would label the sample's own scatter.
+    // splats (render.cpp), which weigh its photons by how Cycles would label the sample's own scatter (sample_brdf).
     LabelShare label_share = LabelShare::whole;
 };
 
@@ -96,18 +96,30 @@ inline bool photon_reaches_sample(const ViewSample& s, const glm::vec3& p, const
     return true;
 }
 
+// Whether a Lambert-only sample takes its albedo under `share`: it is labelled diffuse whole.
+inline bool lambert_takes(LabelShare share) { return share != LabelShare::other && share != LabelShare::other_parts; }
+
 // f_r(x, ωi, ωo): the view sample's BRDF for light arriving from ωi (towards the light), seen along s.wo.
 // albedo/π, plus for kGlossy samples their reflection lobes (shading.h); `lobes` is ViewSamples::lobes.data().
-// `share`: all of it, or the share Cycles' camera paths label diffuse or not (LabelShare, for the Caustics
-// output: a Lambert-only sample is labelled diffuse whole).
+// `share`: all of it, or what the Caustics output takes (render.cpp: splat_caustics) of the photons' shares:
+//   - diffuse / other: the share of f Cycles' camera paths label diffuse or not (LabelShare; a Lambert-only sample
+//     is labelled diffuse whole);
+//   - at a kAfterDiffuseScatter sample, whose other parts Cycles' toggles drop: diffuse is its diffuse parts' f and
+//     other nothing, and other_parts (which every other sample takes nothing of) the f of those dropped parts.
 // A kBumpShadowed sample's diffuse parts take Cycles' bump shadowing term of ωi (bump_shadowing.h).
 inline glm::dvec3 sample_brdf(const ViewSample& s, const Lobe* lobes, const glm::vec3& wi, LabelShare share) {
     constexpr double inv_pi = 0.318309886183790671538;
+    if (s.flags & kAfterDiffuseScatter) {
+        if (share == LabelShare::other) return glm::dvec3(0.0);
+        if (share == LabelShare::diffuse) share = LabelShare::diffuse_parts;
+    } else if (share == LabelShare::other_parts) {
+        return glm::dvec3(0.0);
+    }
     const float diffuse_term =
         s.flags & kBumpShadowed ? bump_shadowing_term(bump_form_of(s.flags), s.smooth_normal, s.shading_normal, wi)
                                 : 1.0f;
     if (!(s.flags & kGlossy))
-        return share == LabelShare::other ? glm::dvec3(0.0) : glm::dvec3(s.albedo) * (inv_pi * diffuse_term);
+        return lambert_takes(share) ? glm::dvec3(s.albedo) * (inv_pi * diffuse_term) : glm::dvec3(0.0);
     return glm::dvec3(bsdf_eval_reflection(s.albedo, lobes + s.lobe_begin, static_cast<int>(s.lobe_count),
                                            s.shading_normal, wi, s.wo, share, s.selection_floor, diffuse_term));
 }

@@ -36,6 +36,11 @@ enum ViewSampleFlags : uint32_t {
     // Which term (bump_shadowing.h): with neither bit, Cycles 3.x's.
     kBumpShadowingCycles4 = 32u,
     kBumpUncorrected = 64u,  // with kBumpShadowingCycles4: the material's Bump Map Correction is off
+    // The camera path reached the sample right after a diffuse-labelled scatter (translucency) and its surface has
+    // a diffuse part (without one it is a kCausticSample). Cycles' Caustics toggles drop the surface's other parts
+    // there: what those gather, direct light included, is the Caustics output's whole, and the diffuse parts keep
+    // only their photons' kReachedDiffusely share (splat.h: sample_brdf; render.cpp: splat_caustics).
+    kAfterDiffuseScatter = 128u,
 };
 
 // The flags that record a bump shadowing term's form, and the form they record.
@@ -77,6 +82,12 @@ struct ViewSample {
     // shading.h; 0 elsewhere): how Cycles labels the scatter here, for the Caustics output (LabelShare).
     float selection_floor;
 };
+
+// A kAfterDiffuseScatter sample with parts Cycles' Caustics toggles drop (lobes beyond its Lambert albedo; those
+// labelled diffuse drop nothing, but few samples are such): the Caustics output takes their light whole.
+inline bool has_dropped_parts(const ViewSample& s) {
+    return (s.flags & kAfterDiffuseScatter) && (s.lobe_count > 0 || s.branched_lobes > 0);
+}
 
 struct ViewSamples {
     int width = 0, height = 0;

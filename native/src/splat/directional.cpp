@@ -903,7 +903,7 @@ private:
                 // A diffuse sample's f_r does not depend on ω̄: with every bin facing it, one product.
                 if (diffuse && (h.mode & kSumsFaceAll)) {
                     // (sample_brdf's: a Lambert-only sample is labelled diffuse whole.)
-                    const glm::vec3 albedo = params_.label_share == LabelShare::other ? glm::vec3(0.0f) : s.albedo;
+                    const glm::vec3 albedo = lambert_takes(params_.label_share) ? s.albedo : glm::vec3(0.0f);
                     radiance_[i] = albedo * s.throughput * ((1.0f - beta) * h.own + beta * h.parent);
                     continue;
                 }
