@@ -806,6 +806,16 @@ Fixed in the engine (each a regression scene of `tests/blender/test_differential
   1.020, 9: 1.42 → 1.017, 182: 1.47 → 1.032, 190: 1.98 → 0.988, 195: 1.22 → 0.996. Tests: `test_caustics_pass_carries_what_cycles_caustic_toggles_remove[108]`; in `test_glossy.cpp`,
   `GlossyPhotons.StoredOnRoughGlossyWithEqualPowersAndNoCausticFlag` and `ScatterLabels`; `test_methods.py`'s
   caustics pass in every method.
+- **A surface seen through translucency kept its glossy light out of the Caustics pass** (a definition). Cycles
+  labels a translucent bounce diffuse, and its toggles then drop every part of the next surface but the
+  diffuse-labelled ones. A surface without a diffuse part gave the pass all its light; one with a diffuse part was
+  splatted as if the camera had reached it directly, and what its glossy parts reflect, direct light included,
+  stayed out. Such view samples are now flagged (`kAfterDiffuseScatter`): their diffuse parts take the photons'
+  reached-diffusely share, a third caustic splat gives every photon's light through their other parts, and their
+  direct light through those parts is estimated on its own (`compute_dropped_direct_light`). The combined image
+  does not change. Seed 132 (a Principled wall of metallic 0.67 behind a translucent ball): 0.904 → 0.988, the
+  ball's pixels with the glass wall and cube hidden 0.50 → 0.998; 63: 0.962 → 0.996, 135: 0.978 → 0.995. Test:
+  `test_the_caustics_pass_takes_what_a_surface_seen_through_translucency_reflects_by_its_glossy_parts`.
 
 - **Lobes of α 0.01 to 0.04 were splatted** (sampling; Photon Splat only). A view sample weighs each photon by its
   lobes at the photon's direction; a lobe a few degrees wide is next to nothing for nearly every photon and
