@@ -365,9 +365,14 @@ glm::vec3 direct_light_at(const DirectLightContext& c, const Bsdf& b, const glm:
     return sum + bsdf_sum / static_cast<float>(m);
 }
 
-std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
+namespace {
+
+// Direct light at every view sample through the parts `parts(sample, b)` leaves in b, the sample's BSDF (false:
+// none, the sample keeps 0), throughput included; numbers from `domain`. `progress`: the call is its stage's own.
+template <typename Parts>
+std::vector<glm::vec3> direct_light_through(const Scene& scene, const ViewSamples& samples,
                                             const DirectLightSettings& settings, const RenderControl& control,
-                                            Stats& stats) {
+                                            Stats& stats, RngDomain domain, bool progress, const Parts& parts) {
     StageTimer timer(stats, "direct_light");
     std::vector<glm::vec3> out(samples.samples.size(), glm::vec3(0.0f));
     const LightSources sources(scene);
@@ -390,10 +395,11 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                                      [](const ViewSamples::SampleLift& l, size_t i) { return l.sample < i; });
         for (size_t i = range.begin(); i < range.end(); ++i) {
             const ViewSample& s = samples.samples[i];
+            bsdf_of(s, samples.lobes, b);
+            if (!parts(s, b)) continue;
             // Each sample of a pixel (one per branch of its camera path) draws its own numbers.
             const uint64_t key = uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32);
-            Rng rng(settings.seed, RngDomain::direct_light, key);
-            bsdf_of(s, samples.lobes, b);
+            Rng rng(settings.seed, domain, key);
             DirectLightSequences sequences;
             std::optional<SampleSequence> light_points, bsdf_points;
             if (world_sampled) {
@@ -409,58 +415,37 @@ std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSample
                                                     LobeSet::reflection, rng, rays, sequences, terminator);
         }
         shadow_rays += rays;
-        control.advance(samples_done += range.size(), samples.samples.size());
+        if (progress) control.advance(samples_done += range.size(), samples.samples.size());
     });
     control.check();
     stats.counters["shadow_rays"] += static_cast<double>(shadow_rays.load());
     return out;
 }
 
+}  // namespace
+
+std::vector<glm::vec3> compute_direct_light(const Scene& scene, const ViewSamples& samples,
+                                            const DirectLightSettings& settings, const RenderControl& control,
+                                            Stats& stats) {
+    return direct_light_through(scene, samples, settings, control, stats, RngDomain::direct_light, true,
+                                [](const ViewSample&, Bsdf&) { return true; });
+}
+
 std::vector<glm::vec3> compute_dropped_direct_light(const Scene& scene, const ViewSamples& samples,
                                                     const DirectLightSettings& settings, const RenderControl& control,
                                                     Stats& stats) {
-    std::vector<size_t> chosen;
-    for (size_t i = 0; i < samples.samples.size(); ++i)
-        if (has_dropped_parts(samples.samples[i])) chosen.push_back(i);
-    if (chosen.empty()) return {};
-    StageTimer timer(stats, "direct_light");
-    std::vector<glm::vec3> out(samples.samples.size(), glm::vec3(0.0f));
-    const LightSources sources(scene);
-    if (sources.size() == 0) return out;
-    const DirectLightContext context{scene, sources, settings.samples_per_light, scene_has_transparency(scene)};
-    std::atomic<bool> cancelled{false};
-    std::atomic<uint64_t> shadow_rays{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, chosen.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
-        if (cancelled.load(std::memory_order_relaxed) || control.cancel_requested()) {
-            cancelled = true;
-            return;
-        }
-        uint64_t rays = 0;
-        Bsdf b;
-        for (size_t n = range.begin(); n < range.end(); ++n) {
-            const size_t i = chosen[n];
-            const ViewSample& s = samples.samples[i];
-            bsdf_of(s, samples.lobes, b);
-            b.lambert = glm::vec3(0.0f);
-            int kept = 0;
-            for (int k = 0; k < b.lobe_count; ++k)
-                if (!labelled_diffuse(b.lobes[k])) b.lobes[kept++] = b.lobes[k];
-            b.lobe_count = kept;
-            if (kept == 0) continue;
-            const uint64_t key = uint64_t(s.pixel) + (uint64_t(branch_of(s.flags)) << 32);
-            Rng rng(settings.seed, RngDomain::dropped_direct, key);
-            const auto lift = std::lower_bound(samples.terminator.begin(), samples.terminator.end(), i,
-                                               [](const ViewSamples::SampleLift& l, size_t j) { return l.sample < j; });
-            const TerminatorLift* terminator =
-                lift != samples.terminator.end() && lift->sample == i ? &lift->lift : nullptr;
-            out[i] = s.throughput * direct_light_at(context, b, s.position + samples.origin, s.rounding_scale,
-                                                    LobeSet::reflection, rng, rays, {}, terminator);
-        }
-        shadow_rays += rays;
-    });
-    control.check();
-    stats.counters["shadow_rays"] += static_cast<double>(shadow_rays.load());
-    return out;
+    if (std::none_of(samples.samples.begin(), samples.samples.end(), has_dropped_parts)) return {};
+    // The parts Cycles drops there: all but the diffuse-labelled ones.
+    const auto dropped = [](const ViewSample& s, Bsdf& b) {
+        if (!has_dropped_parts(s)) return false;
+        b.lambert = glm::vec3(0.0f);
+        int kept = 0;
+        for (int k = 0; k < b.lobe_count; ++k)
+            if (!labelled_diffuse(b.lobes[k])) b.lobes[kept++] = b.lobes[k];
+        b.lobe_count = kept;
+        return kept > 0;
+    };
+    return direct_light_through(scene, samples, settings, control, stats, RngDomain::dropped_direct, false, dropped);
 }
 
 }  // namespace ps

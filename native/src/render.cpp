@@ -460,11 +460,16 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         direct_settings.sequence_seed = settings.seed;
         direct_settings.iteration = iteration.index;
         const std::vector<glm::vec3> direct = compute_direct_light(scene, samples, direct_settings, control, stats);
-        stats.bytes["direct_light"] = static_cast<double>(direct.capacity() * sizeof(glm::vec3));
+        const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
+        // The Caustics output takes whole what reaches samples after translucency by the parts Cycles drops there.
+        const std::vector<glm::vec3> dropped_direct =
+            caustics_output ? compute_dropped_direct_light(scene, samples, direct_settings, control, stats)
+                            : std::vector<glm::vec3>();
+        stats.bytes["direct_light"] =
+            static_cast<double>((direct.capacity() + dropped_direct.capacity()) * sizeof(glm::vec3));
 
         // 4. Photons (before the hierarchy, whose memory is reserved already, so that the splat's is known).
         control.begin_stage("photons", 0.35, 0.45);
-        const bool caustics_output = contains(requested_outputs(settings), FilmOutput::caustics);
         PhotonSettings photon_settings;
         photon_settings.count = settings.photons;
         photon_settings.max_bounces = settings.max_bounces;
@@ -496,12 +501,7 @@ RenderResult render_iteration(const Scene& scene, const Camera& world_camera, co
         SplatLight light = splat_levels(scene, *splatter, frame, photons, dense, params, caustics_output, settings,
                                         seed, hierarchy ? 0.5 : 0.45, 0.98, control, stats);
         result.kernel_estimate = light.kernel_estimate;
-        if (caustics_output) {
-            // Direct light through the parts Cycles' Caustics toggles drop after translucency is caustic whole.
-            const std::vector<glm::vec3> dropped =
-                compute_dropped_direct_light(scene, samples, direct_settings, control, stats);
-            for (size_t i = 0; i < dropped.size(); ++i) light.caustic[i] += dropped[i];
-        }
+        for (size_t i = 0; i < dropped_direct.size(); ++i) light.caustic[i] += dropped_direct[i];
         stats.bytes["indirect_light"] = static_cast<double>(light.indirect.capacity() * sizeof(glm::vec3));
 
         // 7. The film.
